@@ -1,0 +1,34 @@
+// bspc/build_tree.h: stage 3, the BSP tree with leaf triangle lists.
+#pragma once
+
+#include <bspc/mesh.h>
+#include <bspc/settings.h>
+#include <bspf/bspf_generated.h>
+
+#include <cstdint>
+#include <functional>
+#include <string_view>
+#include <vector>
+
+namespace bspc {
+
+/// The tree in the blob's own layout (see docs/format.md).
+struct BspTree {
+  std::vector<bspf::schema::Node> nodes;
+  std::vector<bspf::schema::Leaf> leaves;
+  std::vector<std::uint32_t> leafTriangles;
+  /// Child reference of the root: a node index, or -1 for a lone leaf.
+  std::int32_t root = -1;
+  std::uint32_t depth = 0;
+};
+
+/// Splits space recursively with the best-scoring candidate plane (see
+/// TreeSettings) until a node is small or deep enough. Triangles are never
+/// split: one that straddles a plane is listed on both sides, so each leaf
+/// lists every triangle that overlaps its cell; a triangle lying in the plane
+/// goes to the side its normal faces. Deterministic.
+/// Precondition: a cleaned mesh (cleanMesh) with at least one triangle.
+BspTree buildTree(const Mesh& mesh, const TreeSettings& settings,
+                  const std::function<void(std::string_view)>& progress = {});
+
+}  // namespace bspc

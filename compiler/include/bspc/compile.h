@@ -1,0 +1,45 @@
+// bspc/compile.h: the whole compile, stage by stage.
+#pragma once
+
+#include <bspc/clean.h>
+#include <bspc/mesh.h>
+#include <bspc/settings.h>
+#include <bspf/world.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace bspc {
+
+/// Wall-clock seconds per stage.
+struct StageTimes {
+  double import = 0, clean = 0, buildTree = 0, planes = 0, write = 0;
+};
+
+struct CompileReport {
+  CleanReport clean;
+  StageTimes seconds;
+  std::uint64_t outputBytes = 0;
+  /// Figures of the tree as the runtime sees it (the blob is verified).
+  bspf::TreeStats tree;
+  std::uint32_t triangles = 0;
+};
+
+/// import, clean, build tree, precompute planes, write: `input` (any format
+/// assimp reads) to the blob at `output`. Throws CompileError with a one-line
+/// message naming the file at fault; `output` is then left as it was.
+CompileReport compileFile(const std::filesystem::path& input, const std::filesystem::path& output,
+                          const CompileSettings& settings);
+
+/// The same stages on a mesh in memory (metres, Y up), returning the blob.
+/// `sourceName` is recorded as the source file name.
+std::vector<std::uint8_t> compileMesh(const Mesh& mesh, const CompileSettings& settings,
+                                      const std::string& sourceName, CompileReport& report);
+
+/// The report as one JSON object (stage times, clean counts, tree figures,
+/// output size).
+std::string toJson(const CompileReport& report);
+
+}  // namespace bspc

@@ -1,0 +1,27 @@
+// bspc/mesh.h: the triangle mesh passed between compiler stages.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <stdexcept>
+#include <vector>
+
+namespace bspc {
+
+/// An indexed triangle mesh in metres, Y up. Triangles are counter-clockwise
+/// seen from the side their face normal points to.
+struct Mesh {
+  std::vector<Eigen::Vector3d> vertices;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+};
+
+/// A compile failure caused by the input or the settings. The message is one
+/// line; the driver prefixes the file it concerns.
+class CompileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace bspc

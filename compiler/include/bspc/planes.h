@@ -1,0 +1,18 @@
+// bspc/planes.h: stage 4, per-triangle collision planes.
+#pragma once
+
+#include <bspc/mesh.h>
+#include <bspf/bspf_generated.h>
+
+#include <vector>
+
+namespace bspc {
+
+/// For each triangle: its face plane; three edge planes, each containing an
+/// edge and the face normal, facing into the triangle; three vertex caps, each
+/// through a corner, parallel to the opposite edge, facing into the triangle
+/// (the article's figures 9 to 11). Computed in double, stored as float.
+/// Precondition: a cleaned mesh (no zero-area triangles).
+std::vector<bspf::schema::TrianglePlanes> computeTrianglePlanes(const Mesh& mesh);
+
+}  // namespace bspc

@@ -1,0 +1,140 @@
+#include <bspc/clean.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace bspc {
+
+namespace {
+
+struct CellKey {
+  std::int64_t x, y, z;
+  bool operator==(const CellKey&) const = default;
+};
+
+struct CellHash {
+  std::size_t operator()(const CellKey& k) const {
+    std::uint64_t h = static_cast<std::uint64_t>(k.x) * 0x9E3779B97F4A7C15ull;
+    h ^= static_cast<std::uint64_t>(k.y) * 0xC2B2AE3D27D4EB4Full + (h << 6) + (h >> 2);
+    h ^= static_cast<std::uint64_t>(k.z) * 0x165667B19E3779F9ull + (h << 6) + (h >> 2);
+    return static_cast<std::size_t>(h);
+  }
+};
+
+// Maps every vertex to the first earlier vertex within `tolerance` (itself if
+// none). The result depends only on the input order, never on hash order.
+std::vector<std::uint32_t> weld(const std::vector<Eigen::Vector3d>& vertices, double tolerance) {
+  std::vector<std::uint32_t> target(vertices.size());
+  // With tolerance 0 only identical positions merge: a cell per position.
+  const double cellSize = tolerance > 0 ? tolerance : 1.0;
+  const double tolerance2 = tolerance * tolerance;
+  std::unordered_map<CellKey, std::vector<std::uint32_t>, CellHash> cells;
+  cells.reserve(vertices.size());
+  auto cellOf = [&](const Eigen::Vector3d& p) {
+    return CellKey{static_cast<std::int64_t>(std::floor(p.x() / cellSize)),
+                   static_cast<std::int64_t>(std::floor(p.y() / cellSize)),
+                   static_cast<std::int64_t>(std::floor(p.z() / cellSize))};
+  };
+  for (std::uint32_t i = 0; i < vertices.size(); ++i) {
+    const Eigen::Vector3d& p = vertices[i];
+    const CellKey home = cellOf(p);
+    std::uint32_t best = i;
+    for (std::int64_t dx = -1; dx <= 1; ++dx)
+      for (std::int64_t dy = -1; dy <= 1; ++dy)
+        for (std::int64_t dz = -1; dz <= 1; ++dz) {
+          const auto it = cells.find({home.x + dx, home.y + dy, home.z + dz});
+          if (it == cells.end()) continue;
+          for (const std::uint32_t j : it->second)
+            if (j < best && (vertices[j] - p).squaredNorm() <= tolerance2) best = j;
+        }
+    target[i] = best;
+    if (best == i) cells[home].push_back(i);
+  }
+  return target;
+}
+
+struct TriangleHash {
+  std::size_t operator()(const std::array<std::uint32_t, 3>& t) const {
+    return (std::size_t(t[0]) * 73856093u) ^ (std::size_t(t[1]) * 19349663u) ^
+           (std::size_t(t[2]) * 83492791u);
+  }
+};
+
+// The same triangle under any rotation of its corners, winding kept.
+std::array<std::uint32_t, 3> canonicalRotation(const std::array<std::uint32_t, 3>& t) {
+  if (t[1] < t[0] && t[1] < t[2]) return {t[1], t[2], t[0]};
+  if (t[2] < t[0] && t[2] < t[1]) return {t[2], t[0], t[1]};
+  return t;
+}
+
+}  // namespace
+
+Mesh cleanMesh(const Mesh& mesh, const CleanSettings& settings, CleanReport& report) {
+  report = CleanReport{};
+  report.inputVertices = static_cast<std::uint32_t>(mesh.vertices.size());
+  report.inputTriangles = static_cast<std::uint32_t>(mesh.triangles.size());
+
+  // The blob stores floats: clean and compute everything on what it will hold.
+  std::vector<Eigen::Vector3d> rounded(mesh.vertices.size());
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const double c = mesh.vertices[i][k];
+      const float f = static_cast<float>(c);
+      if (!std::isfinite(c) || !std::isfinite(f))
+        throw CompileError("vertex " + std::to_string(i) + " has a coordinate that is " +
+                           (std::isfinite(c) ? "too large for a float" : "not finite"));
+      rounded[i][k] = f;
+    }
+  }
+  const std::vector<std::uint32_t> target = weld(rounded, settings.weldTolerance);
+  for (std::uint32_t i = 0; i < target.size(); ++i) report.weldedVertices += target[i] != i;
+
+  Mesh out;
+  std::vector<std::uint32_t> newIndex(rounded.size(), std::numeric_limits<std::uint32_t>::max());
+  std::unordered_set<std::array<std::uint32_t, 3>, TriangleHash> seen;
+  seen.reserve(mesh.triangles.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    std::array<std::uint32_t, 3> tri;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = mesh.triangles[t][k];
+      if (v >= rounded.size())
+        throw CompileError("triangle " + std::to_string(t) + " has a vertex index out of range");
+      tri[k] = target[v];
+    }
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) {
+      ++report.droppedDegenerate;
+      continue;
+    }
+    const double area =
+        0.5 * (rounded[tri[1]] - rounded[tri[0]]).cross(rounded[tri[2]] - rounded[tri[0]]).norm();
+    if (!(area > settings.minTriangleArea) || area == 0) {
+      ++report.droppedZeroArea;
+      continue;
+    }
+    if (!seen.insert(canonicalRotation(tri)).second) {
+      ++report.droppedDuplicate;
+      continue;
+    }
+    std::array<std::uint32_t, 3> kept;
+    for (int k = 0; k < 3; ++k) {
+      std::uint32_t& index = newIndex[tri[k]];
+      if (index == std::numeric_limits<std::uint32_t>::max()) {
+        index = static_cast<std::uint32_t>(out.vertices.size());
+        out.vertices.push_back(rounded[tri[k]]);
+      }
+      kept[k] = index;
+    }
+    out.triangles.push_back(kept);
+  }
+  report.outputVertices = static_cast<std::uint32_t>(out.vertices.size());
+  report.outputTriangles = static_cast<std::uint32_t>(out.triangles.size());
+  if (out.triangles.empty())
+    throw CompileError("no triangle is left after cleaning (" +
+                       std::to_string(report.inputTriangles) + " degenerate or zero-area)");
+  return out;
+}
+
+}  // namespace bspc

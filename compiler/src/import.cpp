@@ -1,0 +1,83 @@
+#include <bspc/import.h>
+
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+
+namespace bspc {
+
+namespace {
+
+Eigen::Matrix4d toEigen(const aiMatrix4x4& m) {
+  Eigen::Matrix4d out;
+  out << m.a1, m.a2, m.a3, m.a4, m.b1, m.b2, m.b3, m.b4, m.c1, m.c2, m.c3, m.c4, m.d1, m.d2, m.d3,
+      m.d4;
+  return out;
+}
+
+// Rotates the source's up axis onto +Y (a proper rotation, so winding and
+// handedness are kept) and scales to metres.
+Eigen::Matrix4d sourceToLevel(const ImportSettings& settings) {
+  Eigen::Matrix3d rotation;
+  switch (settings.up) {
+    case UpAxis::Y: rotation.setIdentity(); break;
+    case UpAxis::Z: rotation << 1, 0, 0, 0, 0, 1, 0, -1, 0; break;  // (x, y, z) -> (x, z, -y)
+    case UpAxis::X: rotation << 0, -1, 0, 1, 0, 0, 0, 0, 1; break;  // (x, y, z) -> (-y, x, z)
+  }
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.topLeftCorner<3, 3>() = settings.scale * rotation;
+  return m;
+}
+
+void appendNode(const aiScene& scene, const aiNode& node, const Eigen::Matrix4d& parent,
+                Mesh& out) {
+  const Eigen::Matrix4d transform = parent * toEigen(node.mTransformation);
+  for (unsigned i = 0; i < node.mNumMeshes; ++i) {
+    const aiMesh& mesh = *scene.mMeshes[node.mMeshes[i]];
+    if (!(mesh.mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
+    const auto base = static_cast<std::uint32_t>(out.vertices.size());
+    for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
+      const aiVector3D& p = mesh.mVertices[v];
+      const Eigen::Vector4d q = transform * Eigen::Vector4d(p.x, p.y, p.z, 1.0);
+      out.vertices.emplace_back(q.head<3>());
+    }
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+      const aiFace& face = mesh.mFaces[f];
+      if (face.mNumIndices != 3) continue;
+      out.triangles.push_back(
+          {base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
+    }
+  }
+  for (unsigned c = 0; c < node.mNumChildren; ++c)
+    appendNode(scene, *node.mChildren[c], transform, out);
+}
+
+}  // namespace
+
+Mesh importMesh(const std::filesystem::path& path, const ImportSettings& settings) {
+  {
+    // assimp's own message for a missing file is vague; say why plainly.
+    std::ifstream probe(path, std::ios::binary);
+    if (!probe) throw CompileError(std::string("cannot open: ") + std::strerror(errno));
+    if (std::filesystem::is_directory(path)) throw CompileError("is a directory, not a mesh");
+  }
+  Assimp::Importer importer;
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  const aiScene* scene = importer.ReadFile(
+      path.string(), aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure);
+  if (!scene || !scene->mRootNode) {
+    std::string why = importer.GetErrorString();
+    if (why.empty()) why = "unknown format or unreadable file";
+    throw CompileError("cannot import: " + why);
+  }
+  Mesh mesh;
+  appendNode(*scene, *scene->mRootNode, sourceToLevel(settings), mesh);
+  if (mesh.triangles.empty()) throw CompileError("the scene holds no triangles");
+  return mesh;
+}
+
+}  // namespace bspc

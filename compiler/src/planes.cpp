@@ -1,0 +1,41 @@
+#include <bspc/planes.h>
+
+namespace bspc {
+
+namespace {
+
+bspf::schema::Plane toPlane(const Eigen::Vector3d& normal, const Eigen::Vector3d& through) {
+  // Normalise the float-rounded normal so the stored plane is unit length in
+  // float, then place it through the point.
+  const Eigen::Vector3d n = normal.cast<float>().cast<double>().normalized();
+  const Eigen::Vector3f nf = n.cast<float>();
+  return bspf::schema::Plane(bspf::schema::Vec3(nf.x(), nf.y(), nf.z()),
+                             static_cast<float>(nf.cast<double>().dot(through)));
+}
+
+}  // namespace
+
+std::vector<bspf::schema::TrianglePlanes> computeTrianglePlanes(const Mesh& mesh) {
+  std::vector<bspf::schema::TrianglePlanes> out;
+  out.reserve(mesh.triangles.size());
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d p[3] = {mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]};
+    const Eigen::Vector3d face = (p[1] - p[0]).cross(p[2] - p[0]).normalized();
+    std::array<Eigen::Vector3d, 3> edgeNormal;
+    std::array<bspf::schema::Plane, 3> edges, caps;
+    for (int i = 0; i < 3; ++i) {
+      // face x edge points into a counter-clockwise triangle.
+      edgeNormal[i] = face.cross(p[(i + 1) % 3] - p[i]).normalized();
+      edges[i] = toPlane(edgeNormal[i], p[i]);
+    }
+    for (int i = 0; i < 3; ++i) {
+      // The edge opposite corner i runs from corner i+1 to corner i+2.
+      caps[i] = toPlane(-edgeNormal[(i + 1) % 3], p[i]);
+    }
+    out.emplace_back(toPlane(face, (p[0] + p[1] + p[2]) / 3.0), flatbuffers::span<const bspf::schema::Plane, 3>(edges),
+                     flatbuffers::span<const bspf::schema::Plane, 3>(caps));
+  }
+  return out;
+}
+
+}  // namespace bspc

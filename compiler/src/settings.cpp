@@ -1,0 +1,70 @@
+#include <bspc/settings.h>
+#include <bspc/mesh.h>
+#include <bspf/world.h>
+
+#include <cmath>
+#include <sstream>
+
+namespace bspc {
+
+const char* toString(UpAxis axis) {
+  switch (axis) {
+    case UpAxis::X: return "x";
+    case UpAxis::Y: return "y";
+    case UpAxis::Z: return "z";
+  }
+  return "?";
+}
+
+const char* toString(SplitCandidates candidates) {
+  switch (candidates) {
+    case SplitCandidates::Axis: return "axis";
+    case SplitCandidates::Triangle: return "triangle";
+    case SplitCandidates::Both: return "both";
+  }
+  return "?";
+}
+
+namespace {
+void require(bool ok, const char* what) {
+  if (!ok) throw CompileError(std::string("invalid setting: ") + what);
+}
+}  // namespace
+
+void validate(const CompileSettings& s) {
+  require(std::isfinite(s.import.scale) && s.import.scale > 0, "scale must be finite and > 0");
+  require(std::isfinite(s.clean.weldTolerance) && s.clean.weldTolerance >= 0 &&
+              s.clean.weldTolerance < 1,
+          "weld tolerance must be >= 0 and < 1 m");
+  require(std::isfinite(s.clean.minTriangleArea) && s.clean.minTriangleArea >= 0,
+          "minimum triangle area must be >= 0");
+  require(s.tree.maxLeafTriangles >= 1 && s.tree.maxLeafTriangles <= 4096,
+          "max leaf triangles must be 1 to 4096");
+  require(s.tree.maxDepth >= 1 && s.tree.maxDepth <= bspf::kMaxTreeDepth,
+          "max depth must be 1 to 64");
+  require(std::isfinite(s.tree.balanceWeight) && s.tree.balanceWeight >= 0,
+          "balance weight must be >= 0");
+  require(std::isfinite(s.tree.splitWeight) && s.tree.splitWeight >= 0,
+          "split weight must be >= 0");
+  require(std::isfinite(s.tree.queryReach) && s.tree.queryReach >= 0,
+          "query reach must be finite and >= 0");
+  require(s.tree.axisCandidatesPerAxis >= 1 && s.tree.axisCandidatesPerAxis <= 64,
+          "axis candidates must be 1 to 64");
+  require(s.tree.triangleCandidates >= 1 && s.tree.triangleCandidates <= 256,
+          "triangle candidates must be 1 to 256");
+}
+
+std::string describeOptions(const CompileSettings& s) {
+  std::ostringstream out;
+  out.precision(9);
+  out << "up=" << toString(s.import.up) << " scale=" << s.import.scale
+      << " weld=" << s.clean.weldTolerance << " min-area=" << s.clean.minTriangleArea
+      << " max-leaf-triangles=" << s.tree.maxLeafTriangles << " max-depth=" << s.tree.maxDepth
+      << " balance-weight=" << s.tree.balanceWeight << " split-weight=" << s.tree.splitWeight
+      << " query-reach=" << s.tree.queryReach << " candidates=" << toString(s.tree.candidates)
+      << " axis-candidates=" << s.tree.axisCandidatesPerAxis
+      << " triangle-candidates=" << s.tree.triangleCandidates;
+  return out.str();
+}
+
+}  // namespace bspc

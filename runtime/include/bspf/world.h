@@ -1,0 +1,138 @@
+// bspf/world.h: a compiled level (.bspf), mapped read-only and verified.
+//
+// A World never copies geometry: every accessor returns a view into the file
+// mapping or into the caller's bytes. A World is immutable after it is opened,
+// so one World may be shared by any number of threads without locking.
+//
+// Typical use:
+//
+//   bspf::OpenResult opened = bspf::openWorld("level.bspf");
+//   if (!opened) { log(opened.message); return; }
+//   const bspf::World& world = *opened.world;
+#pragma once
+
+#include <bspf/bspf_generated.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+
+namespace bspf {
+
+/// The blob format version this runtime reads. bspc writes it; the loader
+/// refuses any other value with LoadStatus::WrongVersion.
+inline constexpr std::uint32_t kFormatVersion = 1;
+
+/// The four-character file identifier after the size prefix.
+inline constexpr const char* kFileIdentifier = "BSPF";
+
+/// The deepest BSP tree the runtime accepts (root node at depth 0). Bounds the
+/// traversal stack, so queries never allocate for it.
+inline constexpr std::uint32_t kMaxTreeDepth = 64;
+
+/// Why a blob was refused. Each is a distinct failure a caller may react to.
+enum class LoadStatus {
+  Ok,
+  /// The file could not be opened, sized or mapped (see the message).
+  CannotOpen,
+  /// Fewer bytes than the blob's size prefix announces: an interrupted copy.
+  Truncated,
+  /// Not a .bspf blob at all: the file identifier is not "BSPF".
+  WrongIdentifier,
+  /// A .bspf blob of another format version: recompile it with this bspc.
+  WrongVersion,
+  /// The bytes are not a well-formed blob: FlatBuffers verification failed, or
+  /// a semantic check did (an index out of range, a node graph that is not a
+  /// tree, a non-finite float, a normal not of unit length).
+  Malformed,
+  /// The caller's bytes are not 8-byte aligned (a broken precondition of
+  /// viewWorld that is reported rather than read misaligned).
+  Misaligned,
+};
+
+/// A short, stable name for a status ("truncated", "wrong version", ...).
+const char* toString(LoadStatus status);
+
+/// A verified, read-only compiled level. Cheap to copy: copies share the
+/// mapping, which lives as long as the last copy.
+class World {
+ public:
+  /// Level geometry, metres, Y up. Views into the blob.
+  std::span<const schema::Vec3> vertices() const { return vertices_; }
+  std::span<const schema::Triangle> triangles() const { return triangles_; }
+  /// Parallel to triangles(): each triangle's face, edge and cap planes.
+  std::span<const schema::TrianglePlanes> trianglePlanes() const { return planes_; }
+
+  /// The BSP tree. Child references: >= 0 node index, < 0 leaf (-ref - 1).
+  std::span<const schema::Node> nodes() const { return nodes_; }
+  std::span<const schema::Leaf> leaves() const { return leaves_; }
+  /// Triangle indices, in ranges owned by the leaves.
+  std::span<const std::uint32_t> leafTriangles() const { return leafTriangles_; }
+  /// The root child reference; -1 (leaf 0) when the tree is a single leaf.
+  std::int32_t root() const { return root_; }
+  /// Depth of the deepest leaf (<= kMaxTreeDepth).
+  std::uint32_t treeDepth() const { return treeDepth_; }
+
+  /// The triangles of leaf `leafIndex`. Precondition: leafIndex < leaves().size().
+  std::span<const std::uint32_t> leafTriangleList(std::uint32_t leafIndex) const;
+
+  /// Metadata: bounds, build info (compiler version, options, statistics).
+  const schema::World& blob() const { return *root_table_; }
+  /// The whole blob, size prefix included.
+  std::span<const std::byte> bytes() const { return bytes_; }
+
+ private:
+  friend struct WorldAccess;
+  std::shared_ptr<const void> owner_;  // the mapping, or null for caller bytes
+  std::span<const std::byte> bytes_;
+  const schema::World* root_table_ = nullptr;
+  std::span<const schema::Vec3> vertices_;
+  std::span<const schema::Triangle> triangles_;
+  std::span<const schema::TrianglePlanes> planes_;
+  std::span<const schema::Node> nodes_;
+  std::span<const schema::Leaf> leaves_;
+  std::span<const std::uint32_t> leafTriangles_;
+  std::int32_t root_ = -1;
+  std::uint32_t treeDepth_ = 0;
+};
+
+/// The outcome of opening a blob: a World, or a status and a one-line message
+/// naming the file (or "<memory>") and what is wrong.
+struct OpenResult {
+  std::optional<World> world;
+  LoadStatus status = LoadStatus::Ok;
+  std::string message;
+  explicit operator bool() const { return world.has_value(); }
+};
+
+/// Maps `path` read-only and verifies it (FlatBuffers verifier, then semantic
+/// checks: see LoadStatus::Malformed). Cost: one pass over the blob, no copy of
+/// geometry. Never throws for bad bytes; returns a status instead.
+OpenResult openWorld(const std::filesystem::path& path);
+
+/// Verifies caller-owned bytes and views them in place. The bytes must stay
+/// alive and unchanged while the World or any copy of it is used, and must be
+/// 8-byte aligned (else LoadStatus::Misaligned).
+OpenResult viewWorld(std::span<const std::byte> bytes);
+
+/// Tree shape figures, as `bspc --info` prints them.
+struct TreeStats {
+  std::uint32_t nodes = 0;
+  std::uint32_t leaves = 0;
+  std::uint32_t emptyLeaves = 0;
+  std::uint32_t depthMax = 0;
+  double depthMean = 0;  // over leaves
+  std::uint32_t trianglesPerLeafMax = 0;
+  double trianglesPerLeafMean = 0;       // over leaves
+  double referencesPerTriangle = 0;      // leaf list entries / triangles
+  double bytesPerTriangle = 0;           // whole blob / triangles
+};
+
+/// Walks the tree once. Precondition: `world` was opened by this runtime.
+TreeStats computeTreeStats(const World& world);
+
+}  // namespace bspf
