@@ -39,6 +39,15 @@ void collectSweptLeaves(const World& world, const Vec3& from, const Vec3& to,
   }
 }
 
+std::uint32_t locateLeaf(const World& world, const Vec3& p) {
+  std::int32_t ref = world.root();
+  while (ref >= 0) {
+    const schema::Node& node = world.nodes()[ref];
+    ref = signedDistance(node.split(), p) >= 0 ? node.front() : node.back();
+  }
+  return static_cast<std::uint32_t>(-(ref + 1));
+}
+
 void collectCandidateTriangles(const World& world, const Vec3& from, const Vec3& to,
                                EllipsoidRadii radii, SweepScratch& scratch,
                                std::vector<std::uint32_t>& trianglesOut) {

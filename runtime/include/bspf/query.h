@@ -31,6 +31,10 @@ inline constexpr float kSweepMarginMetres = 1e-4f;
 void collectSweptLeaves(const World& world, const Vec3& from, const Vec3& to,
                         EllipsoidRadii radii, std::vector<std::uint32_t>& leavesOut);
 
+/// The leaf whose cell contains point `p` (metres). A point exactly on a split
+/// plane counts as in front of it. Cost: O(tree depth).
+std::uint32_t locateLeaf(const World& world, const Vec3& p);
+
 /// Per-thread scratch for collectCandidateTriangles: remembers which triangles
 /// were already listed in the current query. Reusable across worlds.
 class SweepScratch {

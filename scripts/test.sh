@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# The whole test suite: install what is needed, build with assertions on,
+# run every test through ctest; then rebuild with AddressSanitizer and
+# UndefinedBehaviorSanitizer and run the tests that feed hostile input.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/install-deps.sh
+jobs="$(nproc)"
+
+# Optimised, but with assert() live: tests check contracts too.
+cmake -S . -B build-test -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS_RELEASE="-O2 -g" >/dev/null
+cmake --build build-test -j"$jobs"
+(cd build-test && ctest -j"$jobs" --output-on-failure)
+
+if [ "${BSPF_SKIP_SANITIZERS:-0}" != 1 ]; then
+  cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug \
+    -DCMAKE_CXX_FLAGS="-O1 -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer" \
+    >/dev/null
+  cmake --build build-asan -j"$jobs" --target bspf_tests
+  echo "sanitizer run: loader, query, clean and bad-input tests"
+  build-asan/tests/bspf_tests "[loader],[query],[clean],[bad-input]"
+fi

@@ -1,0 +1,31 @@
+// Exact reference geometry for tests (double precision, no tolerances): the
+// oracle the runtime's fast paths are checked against.
+#pragma once
+
+#include <bspf/geometry.h>
+
+#include <Eigen/Core>
+
+namespace bspf::test {
+
+/// The point of triangle abc closest to p.
+Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c);
+
+/// Squared distance between segments p0p1 and q0q1.
+double segmentSegmentDistance2(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                               const Eigen::Vector3d& q0, const Eigen::Vector3d& q1);
+
+/// Squared distance between segment p0p1 and triangle abc (0 when they cross).
+double segmentTriangleDistance2(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                                const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                const Eigen::Vector3d& c);
+
+/// Whether the ellipsoid with `radii` swept from `from` to `to` touches
+/// triangle abc (closed sets: touching counts). Exact: works in the space
+/// where the ellipsoid is the unit sphere.
+bool sweptEllipsoidTouchesTriangle(const Eigen::Vector3d& from, const Eigen::Vector3d& to,
+                                   EllipsoidRadii radii, const Eigen::Vector3d& a,
+                                   const Eigen::Vector3d& b, const Eigen::Vector3d& c);
+
+}  // namespace bspf::test

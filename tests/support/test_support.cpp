@@ -1,0 +1,62 @@
+#include "support/test_support.h"
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <sys/wait.h>
+
+namespace bspf::test {
+
+bspc::Mesh boxMesh(const Eigen::Vector3d& low, const Eigen::Vector3d& high) {
+  bspc::Mesh m;
+  for (int i = 0; i < 8; ++i)
+    m.vertices.emplace_back(i & 1 ? high.x() : low.x(), i & 2 ? high.y() : low.y(),
+                            i & 4 ? high.z() : low.z());
+  // Counter-clockwise seen from outside.
+  m.triangles = {{0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}, {0, 1, 5}, {0, 5, 4},
+                 {2, 6, 7}, {2, 7, 3}, {0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}};
+  return m;
+}
+
+void append(bspc::Mesh& mesh, const bspc::Mesh& part) {
+  const auto base = static_cast<std::uint32_t>(mesh.vertices.size());
+  mesh.vertices.insert(mesh.vertices.end(), part.vertices.begin(), part.vertices.end());
+  for (const auto& t : part.triangles) mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+}
+
+std::vector<std::uint8_t> compile(const bspc::Mesh& mesh, const bspc::CompileSettings& settings) {
+  bspc::CompileReport report;
+  return bspc::compileMesh(mesh, settings, "test-mesh", report);
+}
+
+std::filesystem::path freshTempDir(const std::string& tag) {
+  static std::mt19937_64 rng(std::random_device{}());
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() /
+      ("bspf-test-" + tag + "-" + std::to_string(rng() % 1000000000));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+CommandResult run(const std::string& command) {
+  const std::filesystem::path dir = freshTempDir("run");
+  const std::string full = command + " >" + (dir / "out").string() + " 2>" + (dir / "err").string();
+  CommandResult r;
+  const int raw = std::system(full.c_str());
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  auto slurp = [](const std::filesystem::path& p) {
+    std::ifstream in(p);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  };
+  r.out = slurp(dir / "out");
+  r.err = slurp(dir / "err");
+  std::filesystem::remove_all(dir);
+  return r;
+}
+
+}  // namespace bspf::test
