@@ -203,7 +203,10 @@ OpenResult verifyAndView(std::span<const std::byte> bytes, std::shared_ptr<const
                       " blob bytes present");
   if (present > announced)
     return refuse(LoadStatus::Malformed, name,
-                  std::to_string(present - announced) + " stray bytes after the blob");
+                  "malformed: " + std::to_string(present - announced) +
+                      " stray bytes after the blob");
+  if (announced >= FLATBUFFERS_MAX_BUFFER_SIZE)
+    return refuse(LoadStatus::Malformed, name, "malformed: larger than a blob can be (2 GiB)");
 
   const std::uint8_t* body = data + kPrefixBytes;
   // Read the version through a verifier that covers only the root table and

@@ -15,7 +15,9 @@
 namespace bspc {
 
 struct BlobMetadata {
-  std::string sourceFile;  ///< file name only, so builds are reproducible
+  /// Recorded as given; compileFile passes the file name without its
+  /// directory, so builds are reproducible wherever they run.
+  std::string sourceFile;
   CompileSettings settings;
   CleanReport clean;
 };

@@ -39,15 +39,17 @@ enum class LoadStatus {
   Ok,
   /// The file could not be opened, sized or mapped (see the message).
   CannotOpen,
-  /// Fewer bytes than the blob's size prefix announces: an interrupted copy.
+  /// Fewer bytes than the blob's size prefix announces (an interrupted copy),
+  /// or fewer than the 12 bytes any blob starts with (an empty file).
   Truncated,
   /// Not a .bspf blob at all: the file identifier is not "BSPF".
   WrongIdentifier,
   /// A .bspf blob of another format version: recompile it with this bspc.
   WrongVersion,
-  /// The bytes are not a well-formed blob: FlatBuffers verification failed, or
-  /// a semantic check did (an index out of range, a node graph that is not a
-  /// tree, a non-finite float, a normal not of unit length).
+  /// The bytes are not a well-formed blob: stray bytes after it, FlatBuffers
+  /// verification failed, or a semantic check did (a missing vector, an index
+  /// out of range, a node graph that is not a tree, a non-finite float, a
+  /// normal not of unit length, units other than metres with Y up).
   Malformed,
   /// The caller's bytes are not 8-byte aligned (a broken precondition of
   /// viewWorld that is reported rather than read misaligned).
