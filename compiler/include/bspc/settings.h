@@ -45,9 +45,13 @@ struct TreeSettings {
   /// runtime's kMaxTreeDepth).
   std::uint32_t maxDepth = 40;
   /// Score = balanceWeight * |front - back| / n + splitWeight * straddling / n;
-  /// the lowest-scoring candidate splits the node. Both must be >= 0.
+  /// the lowest-scoring candidate splits the node. Both must be >= 0. The
+  /// defaults (1 and 8) were measured on the shared levels against other
+  /// settings (docs/tree-tuning.md, scripts/tune_tree.sh): straddling costs
+  /// more than imbalance, because every straddler is listed twice and queries
+  /// visit more leaves; 8 halves the leaves per query of 2 at equal candidates.
   double balanceWeight = 1.0;
-  double splitWeight = 2.0;
+  double splitWeight = 8.0;
   SplitCandidates candidates = SplitCandidates::Both;
   /// Metres: the size of a typical query (body radius plus one frame's
   /// travel). A node is split only when that pays for itself: when one more
