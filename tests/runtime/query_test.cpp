@@ -1,8 +1,7 @@
 #include <bspf/query.h>
 
-#include <catch2/catch.hpp>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <random>
 
 #include "support/exact_geometry.h"
@@ -179,4 +178,3 @@ TEST_CASE("the swept-leaf query lists leaves in the order the path passes them",
   }
   REQUIRE(checked > 100);  // most walks cross several cells
 }
-

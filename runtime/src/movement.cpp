@@ -1,0 +1,288 @@
+#include <bspf/movement.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <numbers>
+#include <optional>
+#include <tuple>
+
+namespace bspf {
+
+namespace {
+
+struct Contact {
+  Vec3 normal;
+  bool walkable;
+};
+
+struct SlideResult {
+  Vec3 end;
+  int iterations = 0;
+  bool refused = false;
+  int contactCount = 0;
+  std::array<Contact, kMaxReportedContacts> contacts;
+};
+
+struct Hit {
+  std::uint32_t triangle;
+  float facing;
+};
+
+// Whether the centre point `p`, projected onto triangle `planes`' face, lies
+// inside the triangle grown by the body: all six perpendicular planes, each
+// pushed out by the body's extent along that plane's own normal (a local
+// offset; the stored plane is never modified, the article's second defect).
+bool insideGrownTriangle(const schema::TrianglePlanes& planes, const Vec3& p,
+                         EllipsoidRadii radii) {
+  for (int k = 0; k < 3; ++k) {
+    const schema::Plane& edge = *planes.edges()->Get(k);
+    if (signedDistance(edge, p) + effectiveRadius(edge.normal(), radii) < 0) return false;
+    const schema::Plane& cap = *planes.caps()->Get(k);
+    if (signedDistance(cap, p) + effectiveRadius(cap.normal(), radii) < 0) return false;
+  }
+  return true;
+}
+
+// The triangle in the way of the move start -> end with the lowest facing
+// value, if any.
+std::optional<Hit> findBlockingTriangle(const World& world, const Vec3& start, const Vec3& end,
+                                        EllipsoidRadii radii,
+                                        std::span<const std::uint32_t> candidates) {
+  const Vec3 move = end - start;
+  const float moveLength = move.norm();
+  const Vec3 direction = moveLength > 0 ? Vec3(move / moveLength) : Vec3::Zero();
+  std::optional<Hit> best;
+  for (const std::uint32_t t : candidates) {
+    const schema::TrianglePlanes& planes = world.trianglePlanes()[t];
+    const schema::Plane& face = planes.face();
+    const float reach = effectiveRadius(face.normal(), radii);
+    const float startSide = signedDistance(face, start);
+    const float endSide = signedDistance(face, end);
+    // Pre-check. The end must be within the offset plane, and the centre must
+    // start in front of the face (a triangle is one-sided; the back of a
+    // two-sided surface is its own triangle). Unlike the article's sign test
+    // (startSide - r) * (endSide - r) < 0, this also catches a body that
+    // starts within the offset plane, which that test lets pass through.
+    if (endSide >= reach || startSide < 0) continue;
+    // Test the six planes where the centre crosses the offset plane (the
+    // article leaves this position unspecified: testing the end lets fast
+    // bodies skip small triangles). A body already within it is tested at
+    // its start and at its end.
+    bool inside;
+    if (startSide >= reach) {
+      const float t = (startSide - reach) / (startSide - endSide);
+      inside = insideGrownTriangle(planes, start + t * move, radii);
+    } else {
+      inside = insideGrownTriangle(planes, start, radii) || insideGrownTriangle(planes, end, radii);
+    }
+    if (!inside) continue;
+    const float facing = toVec3(face.normal()).dot(direction);
+    if (!best || facing < best->facing || (facing == best->facing && t < best->triangle))
+      best = Hit{t, facing};
+  }
+  return best;
+}
+
+// Moves the end out of blocking triangles until none blocks, or refuses the
+// move after maxIterations slides. Walkable contacts push the end straight
+// up rather than along the normal, so a body standing on a slope does not
+// creep down it.
+SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,
+                              EllipsoidRadii radii, const MovementSettings& settings,
+                              float walkableNormalY, StepScratch& scratch) {
+  SlideResult result;
+  result.end = desiredEnd;
+  for (int iteration = 0;; ++iteration) {
+    collectCandidateTriangles(world, start, result.end, radii, scratch.sweep, scratch.candidates);
+    const std::optional<Hit> hit =
+        findBlockingTriangle(world, start, result.end, radii, scratch.candidates);
+    if (!hit) return result;
+    if (iteration == settings.maxIterations) {
+      result.refused = true;
+      result.end = start;
+      return result;
+    }
+    const schema::Plane& face = world.trianglePlanes()[hit->triangle].face();
+    const Vec3 normal = toVec3(face.normal());
+    const float depth =
+        effectiveRadius(normal, radii) + settings.skin - signedDistance(face, result.end);
+    const bool walkable = normal.y() >= walkableNormalY;
+    if (walkable)
+      result.end.y() += depth / normal.y();
+    else
+      result.end += normal * depth;
+    ++result.iterations;
+    if (result.contactCount < kMaxReportedContacts)
+      result.contacts[result.contactCount++] = {normal, walkable};
+  }
+}
+
+// Removes (slide) or reflects (bounce) the velocity's component into each
+// contact; a walkable contact stops the fall.
+void respondToContacts(Body& body, const SlideResult& slide, float dt) {
+  const float e = body.settings.restitution;
+  // Below this normal speed a bounce is a resting contact, not a rebound:
+  // one frame of gravity, so a resting body does not jitter.
+  const float restingSpeed = 2.0f * body.settings.gravity * dt;
+  for (int i = 0; i < slide.contactCount; ++i) {
+    const Contact& c = slide.contacts[i];
+    const float into = body.velocity.dot(c.normal);
+    if (into >= 0) continue;
+    const bool bounce = e > 0 && -into > restingSpeed;
+    if (c.walkable && !bounce) {
+      body.velocity.y() = std::max(body.velocity.y(), 0.0f);
+    } else {
+      body.velocity -= (1.0f + (bounce ? e : 0.0f)) * into * c.normal;
+    }
+  }
+}
+
+void futureVelocity(Body& body, const Vec3& force, float dt) {
+  const MovementSettings& s = body.settings;
+  Eigen::Vector2f horizontal(body.velocity.x(), body.velocity.z());
+  const float speed = horizontal.norm();
+  const float friction = body.grounded ? s.groundFriction : s.airFriction;
+  if (speed > 0) horizontal *= std::max(0.0f, speed - friction * dt) / speed;
+  horizontal += Eigen::Vector2f(force.x(), force.z()) * dt;
+  const float limited = horizontal.norm();
+  if (limited > s.maxHorizontalSpeed) horizontal *= s.maxHorizontalSpeed / limited;
+  body.velocity.x() = horizontal.x();
+  body.velocity.z() = horizontal.y();
+  body.velocity.y() -= s.gravity * dt;
+}
+
+float walkableNormalY(const MovementSettings& s) {
+  return std::cos(s.walkableSlopeDegrees * std::numbers::pi_v<float> / 180.0f);
+}
+
+// Adds a slide's figures to the report. Pushes between bodies add their
+// contacts but not their iterations or refusals: those describe the body's
+// own move.
+void record(StepReport* report, const SlideResult& slide, bool ownMove) {
+  if (!report) return;
+  if (ownMove) {
+    report->iterations += slide.iterations;
+    report->refused = report->refused || slide.refused;
+  }
+  for (int i = 0; i < slide.contactCount && report->contactCount < kMaxReportedContacts; ++i)
+    report->contactNormals[report->contactCount++] = slide.contacts[i].normal;
+}
+
+[[maybe_unused]] bool settingsInRange(const Body& body) {
+  const MovementSettings& s = body.settings;
+  return body.radii.xz > 0 && body.radii.y > 0 && s.gravity >= 0 && s.groundFriction >= 0 &&
+         s.airFriction >= 0 && s.maxHorizontalSpeed > 0 && s.walkableSlopeDegrees >= 0 &&
+         s.walkableSlopeDegrees <= 89 && s.maxIterations >= 1 && s.maxIterations <= 32 &&
+         s.restitution >= 0 && s.restitution <= 1 && s.skin > 0;
+}
+
+}  // namespace
+
+void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepScratch& scratch,
+              StepReport* report) {
+  assert(dt > 0 && std::isfinite(dt));
+  assert(settingsInRange(body));
+  if (report) *report = StepReport{};
+
+  futureVelocity(body, force, dt);
+  const Vec3 start = body.position;
+  const float walkableY = walkableNormalY(body.settings);
+  const SlideResult slide = slideAgainstLevel(world, start, start + body.velocity * dt, body.radii,
+                                              body.settings, walkableY, scratch);
+  body.position = slide.end;
+  respondToContacts(body, slide, dt);
+  body.grounded = std::any_of(slide.contacts.begin(), slide.contacts.begin() + slide.contactCount,
+                              [](const Contact& c) { return c.walkable; });
+  if (report) {
+    record(report, slide, true);
+    report->grounded = body.grounded;
+  }
+}
+
+void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3> forces, float dt,
+                StepScratch& scratch, std::span<StepReport> reports) {
+  assert(forces.size() == bodies.size());
+  assert(reports.empty() || reports.size() == bodies.size());
+  auto reportOf = [&](std::size_t i) { return reports.empty() ? nullptr : &reports[i]; };
+  for (std::size_t i = 0; i < bodies.size(); ++i)
+    stepBody(world, bodies[i], forces[i], dt, scratch, reportOf(i));
+
+  // Broad phase: a uniform grid with cells as wide as the widest body, so an
+  // overlapping pair always sits in the same or neighbouring cells. Bodies
+  // are sorted by cell key; each looks up the 27 cells around it.
+  float cell = 0;
+  for (const Body& b : bodies) cell = std::max({cell, 2 * b.radii.xz, 2 * b.radii.y});
+  if (bodies.size() < 2 || cell <= 0) return;
+  auto cellCoordinate = [&](float v) {
+    return static_cast<std::int64_t>(std::floor(v / cell)) & 0x1fffff;  // 21 bits each
+  };
+  auto keyOf = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
+    return (std::uint64_t(x & 0x1fffff) << 42) | (std::uint64_t(y & 0x1fffff) << 21) |
+           std::uint64_t(z & 0x1fffff);
+  };
+  const std::size_t n = bodies.size();
+  scratch.cellKeys_.resize(n);
+  scratch.order_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3& p = bodies[i].position;
+    scratch.cellKeys_[i] =
+        keyOf(cellCoordinate(p.x()), cellCoordinate(p.y()), cellCoordinate(p.z()));
+    scratch.order_[i] = static_cast<std::uint32_t>(i);
+  }
+  std::sort(scratch.order_.begin(), scratch.order_.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return scratch.cellKeys_[a] != scratch.cellKeys_[b]
+               ? scratch.cellKeys_[a] < scratch.cellKeys_[b]
+               : a < b;
+  });
+  auto firstInCell = [&](std::uint64_t key) {
+    return std::lower_bound(
+        scratch.order_.begin(), scratch.order_.end(), key,
+        [&](std::uint32_t body, std::uint64_t k) { return scratch.cellKeys_[body] < k; });
+  };
+
+  for (std::size_t i = 0; i < n; ++i) {
+    Body& a = bodies[i];
+    const std::int64_t cx = cellCoordinate(a.position.x()), cy = cellCoordinate(a.position.y()),
+                       cz = cellCoordinate(a.position.z());
+    for (std::int64_t dx = -1; dx <= 1; ++dx)
+      for (std::int64_t dy = -1; dy <= 1; ++dy)
+        for (std::int64_t dz = -1; dz <= 1; ++dz) {
+          const std::uint64_t key = keyOf(cx + dx, cy + dy, cz + dz);
+          for (auto it = firstInCell(key);
+               it != scratch.order_.end() && scratch.cellKeys_[*it] == key; ++it) {
+            const std::size_t j = *it;
+            if (j <= i) continue;  // each pair once, lower index first
+            Body& b = bodies[j];
+            Vec3 apart = a.position - b.position;  // from b towards a
+            float distance = apart.norm();
+            if (distance <= 1e-6f) {
+              apart = Vec3::UnitX();  // coincident: any fixed direction
+              distance = 0;
+            } else {
+              apart /= distance;
+            }
+            const float overlap =
+                effectiveRadius(apart, a.radii) + effectiveRadius(apart, b.radii) - distance;
+            if (overlap <= 0) continue;
+            // Each moves half the overlap away from the other, as a move
+            // against the level (no gravity): a push never enters a wall.
+            const float half = 0.5f * overlap + 0.5f * a.settings.skin;
+            for (auto [body, sign, index] : {std::tuple{&a, 1.0f, i}, std::tuple{&b, -1.0f, j}}) {
+              const SlideResult push = slideAgainstLevel(
+                  world, body->position, body->position + sign * half * apart, body->radii,
+                  body->settings, walkableNormalY(body->settings), scratch);
+              body->position = push.end;
+              const float closing = body->velocity.dot(sign * apart);
+              if (closing < 0) body->velocity -= closing * sign * apart;
+              if (StepReport* r = reportOf(index)) {
+                record(r, push, false);
+                ++r->bodyContacts;
+              }
+            }
+          }
+        }
+  }
+}
+
+}  // namespace bspf
