@@ -17,6 +17,6 @@ if [ "${BSPF_SKIP_SANITIZERS:-0}" != 1 ]; then
     -DCMAKE_CXX_FLAGS="-O1 -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer" \
     >/dev/null
   cmake --build build-asan -j"$jobs" --target bspf_tests
-  echo "sanitizer run: loader, query, clean and bad-input tests"
-  build-asan/tests/bspf_tests "[loader],[query],[clean],[bad-input]"
+  echo "sanitizer run: loader, query, clean, bad-input and movement tests"
+  build-asan/tests/bspf_tests "[loader],[query]~[shared-levels],[clean],[bad-input],[movement]"
 fi

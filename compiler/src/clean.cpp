@@ -1,5 +1,6 @@
 #include <bspc/clean.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -33,10 +34,15 @@ std::vector<std::uint32_t> weld(const std::vector<Eigen::Vector3d>& vertices, do
   const double tolerance2 = tolerance * tolerance;
   std::unordered_map<CellKey, std::vector<std::uint32_t>, CellHash> cells;
   cells.reserve(vertices.size());
+  // Clamped so huge coordinates over a tiny tolerance neither overflow the
+  // integer nor its neighbours; clamped cells merely share a bucket, and the
+  // distance test still decides every weld.
+  auto cellIndex = [&](double v) {
+    constexpr double kLimit = 4503599627370496.0;  // 2^52
+    return static_cast<std::int64_t>(std::clamp(std::floor(v / cellSize), -kLimit, kLimit));
+  };
   auto cellOf = [&](const Eigen::Vector3d& p) {
-    return CellKey{static_cast<std::int64_t>(std::floor(p.x() / cellSize)),
-                   static_cast<std::int64_t>(std::floor(p.y() / cellSize)),
-                   static_cast<std::int64_t>(std::floor(p.z() / cellSize))};
+    return CellKey{cellIndex(p.x()), cellIndex(p.y()), cellIndex(p.z())};
   };
   for (std::uint32_t i = 0; i < vertices.size(); ++i) {
     const Eigen::Vector3d& p = vertices[i];

@@ -1,1 +1,327 @@
+// The real bspc executable on bad input: it fails with a non-zero exit and one
+// line on stderr naming the file at fault and why, and leaves no output and no
+// temporary file behind; an existing output survives a failed compile intact.
+#include <algorithm>
 #include <catch2/catch.hpp>
+#include <cctype>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "support/test_support.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string quoted(const fs::path& path) {
+  std::string out = "'";
+  for (const char c : path.string()) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+bspf::test::CommandResult runBspc(const std::string& arguments) {
+  return bspf::test::run(quoted(bspf::test::bspcExecutable()) + " " + arguments);
+}
+
+void writeText(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  REQUIRE(out);
+}
+
+std::vector<char> readBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  REQUIRE(in);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+// Files in `dir` that look like bspc's temporary files (".NAME.tmp-PID").
+std::vector<std::string> temporaryFiles(const fs::path& dir) {
+  std::vector<std::string> out;
+  if (!fs::is_directory(dir)) return out;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name.find(".tmp-") != std::string::npos) out.push_back(name);
+  }
+  return out;
+}
+
+struct Expected {
+  /// Text the line must contain (the file at fault, an option's name).
+  std::vector<std::string> mentions;
+  /// The reason: the line must contain at least one of these (any case).
+  std::vector<std::string> reasons;
+};
+
+// A clean failure: non-zero exit, exactly one line on stderr with the file
+// and a reason, no output file and no temporary file left in its directory.
+void requireCleanFailure(const bspf::test::CommandResult& r, const fs::path& output,
+                         const Expected& expected) {
+  INFO("stderr: [" << r.err << "]");
+  INFO("stdout: [" << r.out << "]");
+  CHECK(r.status != 0);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(!r.err.empty());
+  if (!r.err.empty()) CHECK(r.err.back() == '\n');
+  CHECK(r.err.find('\r') == std::string::npos);
+  CHECK_THAT(r.err, Catch::Contains("error"));
+  for (const std::string& mention : expected.mentions) CHECK_THAT(r.err, Catch::Contains(mention));
+  if (!expected.reasons.empty()) {
+    const bool reasoned = std::any_of(
+        expected.reasons.begin(), expected.reasons.end(), [&](const std::string& reason) {
+          return lower(r.err).find(lower(reason)) != std::string::npos;
+        });
+    CHECK(reasoned);
+  }
+  CHECK_FALSE(fs::exists(output));
+  CHECK(temporaryFiles(output.parent_path()).empty());
+}
+
+const char* kTriangleObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+
+}  // namespace
+
+TEST_CASE("bspc fails cleanly on a missing input file", "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-missing");
+  const auto r = runBspc(quoted(dir / "missing.obj") + " -o " + quoted(dir / "out.bspf"));
+  requireCleanFailure(r, dir / "out.bspf",
+                      {{"missing.obj"}, {"cannot open", "no such file", "not found"}});
+}
+
+TEST_CASE("bspc fails cleanly on a directory given as input", "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-directory");
+  fs::create_directories(dir / "level.obj");
+  const auto r = runBspc(quoted(dir / "level.obj") + " -o " + quoted(dir / "out.bspf"));
+  requireCleanFailure(r, dir / "out.bspf", {{"level.obj"}, {"directory"}});
+}
+
+TEST_CASE("bspc fails cleanly on random bytes with an unknown extension", "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-garbage");
+  std::mt19937 rng(42);
+  std::string bytes;
+  for (int i = 0; i < 4096; ++i) bytes += static_cast<char>(rng() & 0xFF);
+  writeText(dir / "garbage.xyz", bytes);
+  const auto r = runBspc(quoted(dir / "garbage.xyz") + " -o " + quoted(dir / "out.bspf"));
+  requireCleanFailure(r, dir / "out.bspf",
+                      {{"garbage.xyz"}, {"cannot import", "format", "no triangle"}});
+}
+
+TEST_CASE("bspc fails cleanly on an .obj file holding junk text", "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-junk");
+  writeText(dir / "junk.obj", "hello world\nthis is not a mesh\n%%% 12 ab\n\x01\x02\x03\n");
+  const auto r = runBspc(quoted(dir / "junk.obj") + " -o " + quoted(dir / "out.bspf"));
+  requireCleanFailure(r, dir / "out.bspf",
+                      {{"junk.obj"}, {"cannot import", "no triangle", "no mesh", "no faces"}});
+}
+
+TEST_CASE("bspc fails cleanly on an OBJ with vertices but no faces", "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-nofaces");
+  writeText(dir / "points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n");
+  const auto r = runBspc(quoted(dir / "points.obj") + " -o " + quoted(dir / "out.bspf"));
+  requireCleanFailure(r, dir / "out.bspf",
+                      {{"points.obj"}, {"no faces", "no triangle", "cannot import"}});
+}
+
+TEST_CASE("bspc fails cleanly on an OBJ with a nan coordinate", "[compiler][bad-input]") {
+  // assimp parses "nan" into a NaN; the clean stage must then refuse it.
+  const fs::path dir = bspf::test::freshTempDir("bad-nan");
+  writeText(dir / "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n");
+  const auto r = runBspc(quoted(dir / "nan.obj") + " -o " + quoted(dir / "out.bspf"));
+  requireCleanFailure(r, dir / "out.bspf", {{"nan.obj"}, {"finite", "nan", "cannot import"}});
+}
+
+TEST_CASE("bspc fails cleanly on an OBJ with a coordinate too large for a float",
+          "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-huge");
+  writeText(dir / "huge.obj", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\n");
+  const auto r = runBspc(quoted(dir / "huge.obj") + " -o " + quoted(dir / "out.bspf"));
+  requireCleanFailure(r, dir / "out.bspf",
+                      {{"huge.obj"}, {"finite", "too large", "float", "cannot import"}});
+}
+
+TEST_CASE("bspc fails cleanly on an OBJ whose triangles are all degenerate",
+          "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-degenerate");
+  writeText(dir / "flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 1 1 2\n");
+  const auto r = runBspc(quoted(dir / "flat.obj") + " -o " + quoted(dir / "out.bspf"));
+  requireCleanFailure(r, dir / "out.bspf", {{"flat.obj"}, {"no triangle"}});
+}
+
+TEST_CASE("bspc fails cleanly on an empty .obj file", "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-empty");
+  writeText(dir / "empty.obj", "");
+  const auto r = runBspc(quoted(dir / "empty.obj") + " -o " + quoted(dir / "out.bspf"));
+  requireCleanFailure(r, dir / "out.bspf", {{"empty.obj"}, {}});
+}
+
+TEST_CASE("bspc fails cleanly on an OBJ with only lines and points", "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-lines");
+  writeText(dir / "lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\np 1\n");
+  const auto r = runBspc(quoted(dir / "lines.obj") + " -o " + quoted(dir / "out.bspf"));
+  requireCleanFailure(r, dir / "out.bspf",
+                      {{"lines.obj"}, {"no triangle", "no faces", "cannot import"}});
+}
+
+TEST_CASE("bspc fails cleanly on an OBJ face with a vertex index out of range",
+          "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-index");
+  writeText(dir / "index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 7\n");
+  const auto r = runBspc(quoted(dir / "index.obj") + " -o " + quoted(dir / "out.bspf"));
+  requireCleanFailure(r, dir / "out.bspf", {{"index.obj"}, {"range", "index"}});
+}
+
+TEST_CASE("bspc fails cleanly when the output path is a directory", "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-outisdir");
+  writeText(dir / "tri.obj", kTriangleObj);
+  fs::create_directories(dir / "out.bspf");
+  const auto r = runBspc(quoted(dir / "tri.obj") + " -o " + quoted(dir / "out.bspf"));
+  INFO("stderr: [" << r.err << "]");
+  CHECK(r.status != 0);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK_THAT(r.err, Catch::Contains("out.bspf"));
+  CHECK(fs::is_directory(dir / "out.bspf"));
+  CHECK(fs::is_empty(dir / "out.bspf"));
+  CHECK(temporaryFiles(dir).empty());
+}
+
+TEST_CASE("bspc fails cleanly on an output path in a missing directory", "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-outdir");
+  writeText(dir / "tri.obj", kTriangleObj);
+  const fs::path output = dir / "missing" / "out.bspf";
+  const auto r = runBspc(quoted(dir / "tri.obj") + " -o " + quoted(output));
+  requireCleanFailure(r, output, {{"out.bspf"}, {"cannot write", "no such file"}});
+  CHECK_FALSE(fs::exists(dir / "missing"));
+  CHECK(temporaryFiles(dir).empty());
+}
+
+TEST_CASE("bspc refuses to overwrite its input with the output", "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-same");
+  fs::copy_file(bspf::test::samplesDir() / "box_room.obj", dir / "level.obj");
+  const std::vector<char> before = readBytes(dir / "level.obj");
+  auto check = [&](const std::string& outputSpelling) {
+    const auto r = runBspc(quoted(dir / "level.obj") + " -o " + outputSpelling);
+    INFO("stderr: [" << r.err << "]");
+    CHECK(r.status != 0);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK_THAT(r.err, Catch::Contains("level.obj") && Catch::Contains("overwrite"));
+    CHECK(readBytes(dir / "level.obj") == before);
+    CHECK(temporaryFiles(dir).empty());
+  };
+  SECTION("the same path") { check(quoted(dir / "level.obj")); }
+  SECTION("another spelling of the same file") { check(quoted(dir / "." / "level.obj")); }
+  SECTION("a symbolic link to the input") {
+    fs::create_symlink(dir / "level.obj", dir / "link.bspf");
+    const auto r = runBspc(quoted(dir / "level.obj") + " -o " + quoted(dir / "link.bspf"));
+    INFO("stderr: [" << r.err << "]");
+    CHECK(r.status != 0);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(readBytes(dir / "level.obj") == before);
+    CHECK(temporaryFiles(dir).empty());
+  }
+}
+
+TEST_CASE("bspc fails cleanly on bad options", "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-options");
+  writeText(dir / "tri.obj", kTriangleObj);
+  const std::string files = quoted(dir / "tri.obj") + " -o " + quoted(dir / "out.bspf");
+  struct Case {
+    std::string options;
+    Expected expected;
+  };
+  const std::vector<Case> cases{
+      {"--max-depth 0", {{}, {"max depth", "max-depth"}}},
+      {"--max-depth 65", {{}, {"max depth", "max-depth"}}},
+      {"--scale -1", {{}, {"scale"}}},
+      {"--scale=-1", {{}, {"scale"}}},
+      {"--scale 0", {{}, {"scale"}}},
+      {"--scale nan", {{}, {"scale"}}},
+      {"--up w", {{}, {"up"}}},
+      {"--max-leaf-triangles 0", {{}, {"leaf"}}},
+      {"--weld -0.5", {{}, {"weld"}}},
+      {"--candidates sideways", {{}, {"candidates"}}},
+      {"--max-depth many", {{}, {"max-depth", "max depth"}}},
+      {"--no-such-option", {{}, {"no-such-option"}}},
+  };
+  for (const Case& c : cases) {
+    DYNAMIC_SECTION(c.options) {
+      requireCleanFailure(runBspc(c.options + " " + files), dir / "out.bspf", c.expected);
+    }
+  }
+}
+
+TEST_CASE("bspc without an input or output fails with one line", "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-usage");
+  writeText(dir / "tri.obj", kTriangleObj);
+  SECTION("no output") {
+    const auto r = runBspc(quoted(dir / "tri.obj"));
+    CHECK(r.status != 0);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  }
+  SECTION("nothing at all") {
+    const auto r = runBspc("");
+    CHECK(r.status != 0);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  }
+  CHECK(temporaryFiles(dir).empty());
+}
+
+TEST_CASE("bspc --info fails cleanly on a file that is not a blob", "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-info");
+  writeText(dir / "tri.obj", kTriangleObj);
+  for (const char* name : {"tri.obj", "missing.bspf"}) {
+    INFO(name);
+    const auto r = runBspc("--info " + quoted(dir / name));
+    INFO("stderr: [" << r.err << "]");
+    CHECK(r.status != 0);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK_THAT(r.err, Catch::Contains(name));
+  }
+}
+
+TEST_CASE("a failed compile leaves an existing output file byte-identical",
+          "[compiler][bad-input]") {
+  const fs::path dir = bspf::test::freshTempDir("bad-atomic");
+  const fs::path output = dir / "level.bspf";
+  fs::copy_file(bspf::test::samplesDir() / "box_room.obj", dir / "good.obj");
+  const auto good = runBspc(quoted(dir / "good.obj") + " -o " + quoted(output));
+  INFO("stderr: [" << good.err << "]");
+  REQUIRE(good.status == 0);
+  const std::vector<char> before = readBytes(output);
+  REQUIRE(!before.empty());
+
+  writeText(dir / "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n");
+  writeText(dir / "flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+  writeText(dir / "junk.obj", "junk\n");
+  writeText(dir / "garbage.xyz", std::string(512, '\x7f'));
+  // Section names must not hold the (random) temp directory: Catch reruns the
+  // test case until every named section has run.
+  const std::vector<std::pair<std::string, std::string>> failing{
+      {"nan coordinate", quoted(dir / "nan.obj")},
+      {"no triangle left", quoted(dir / "flat.obj")},
+      {"junk obj", quoted(dir / "junk.obj")},
+      {"unknown format", quoted(dir / "garbage.xyz")},
+      {"missing input", quoted(dir / "missing.obj")},
+      {"max-depth 0", "--max-depth 0 " + quoted(dir / "good.obj")},
+      {"up w", "--up w " + quoted(dir / "good.obj")}};
+  for (const auto& [label, input] : failing) {
+    DYNAMIC_SECTION(label) {
+      const auto r = runBspc(input + " -o " + quoted(output));
+      INFO("stderr: [" << r.err << "]");
+      CHECK(r.status != 0);
+      CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+      CHECK(readBytes(output) == before);
+      CHECK(temporaryFiles(dir).empty());
+    }
+  }
+}

@@ -1,1 +1,349 @@
+// cleanMesh: welding, dropping degenerate, zero-area, duplicate triangles and
+// unused vertices, and refusing input it cannot make sense of.
+#include <bspc/clean.h>
+#include <bspc/mesh.h>
+#include <bspc/settings.h>
+
+#include <array>
 #include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace {
+
+using Eigen::Vector3d;
+using Triangles = std::vector<std::array<std::uint32_t, 3>>;
+
+bspc::Mesh meshOf(std::vector<Vector3d> vertices, Triangles triangles) {
+  bspc::Mesh mesh;
+  mesh.vertices = std::move(vertices);
+  mesh.triangles = std::move(triangles);
+  return mesh;
+}
+
+bspc::CleanSettings weldingWithin(double tolerance) {
+  bspc::CleanSettings settings;
+  settings.weldTolerance = tolerance;
+  return settings;
+}
+
+// The position of corner k of output triangle t.
+Vector3d corner(const bspc::Mesh& mesh, std::size_t t, int k) {
+  return mesh.vertices.at(mesh.triangles.at(t)[k]);
+}
+
+// A triangle far from everything else, with `first` as its first corner, so
+// only `first` can weld with anything.
+void addFan(bspc::Mesh& mesh, const Vector3d& first, double offset) {
+  const auto base = static_cast<std::uint32_t>(mesh.vertices.size());
+  mesh.vertices.push_back(first);
+  mesh.vertices.push_back({offset, 10, 0});
+  mesh.vertices.push_back({offset, 10, 1});
+  mesh.triangles.push_back({base, base + 1, base + 2});
+}
+
+}  // namespace
+
+// ==================================================================== weld
+
+TEST_CASE("weld merges vertices within the tolerance and not beyond", "[compiler][clean]") {
+  const double tolerance = 0.01;
+  const Vector3d origin(0, 0, 0);
+  // Each triangle has one corner near the origin and two far corners of its own.
+  bspc::Mesh mesh;
+  addFan(mesh, origin, 1);
+  addFan(mesh, origin + Vector3d(0.006, 0, 0), 2);        // within: welded
+  addFan(mesh, origin + Vector3d(0, -0.004, 0.005), 3);   // within (0.0064): welded
+  addFan(mesh, origin + Vector3d(-0.003, 0, 0), 4);       // across a cell border: welded
+  addFan(mesh, origin + Vector3d(0.014, 0, 0), 5);        // beyond: kept
+  addFan(mesh, origin + Vector3d(0.007, 0.009, 0.0), 6);  // 0.0114 beyond: kept
+  bspc::CleanReport report;
+  const bspc::Mesh clean = bspc::cleanMesh(mesh, weldingWithin(tolerance), report);
+
+  REQUIRE(clean.triangles.size() == 6);
+  CHECK(report.weldedVertices == 3);
+  CHECK(report.inputVertices == 18);
+  CHECK(report.outputVertices == 18 - 3);
+  CHECK(clean.vertices.size() == 15);
+  // The welded corners share the first vertex and its position.
+  for (int t : {1, 2, 3}) {
+    INFO("triangle " << t);
+    CHECK(clean.triangles[t][0] == clean.triangles[0][0]);
+    CHECK(corner(clean, t, 0) == origin);
+  }
+  for (int t : {4, 5}) {
+    INFO("triangle " << t);
+    CHECK(clean.triangles[t][0] != clean.triangles[0][0]);
+    CHECK(corner(clean, t, 0) == mesh.vertices[3 * t].cast<float>().cast<double>());
+  }
+}
+
+TEST_CASE("weld with the default tolerance merges only within 0.1 mm", "[compiler][clean]") {
+  bspc::Mesh mesh;
+  addFan(mesh, {5, 5, 5}, 1);
+  addFan(mesh, {5.00005, 5, 5}, 2);  // 0.05 mm: welded
+  addFan(mesh, {5, 5, 5.0002}, 3);   // 0.2 mm: kept
+  bspc::CleanReport report;
+  const bspc::Mesh clean = bspc::cleanMesh(mesh, {}, report);
+  CHECK(report.weldedVertices == 1);
+  CHECK(clean.triangles[1][0] == clean.triangles[0][0]);
+  CHECK(clean.triangles[2][0] != clean.triangles[0][0]);
+}
+
+TEST_CASE("weld tolerance 0 merges only identical positions", "[compiler][clean]") {
+  bspc::Mesh mesh;
+  addFan(mesh, {1, 2, 3}, 1);
+  addFan(mesh, {1, 2, 3}, 2);
+  addFan(mesh, {1, 2, 3.000001}, 3);
+  bspc::CleanReport report;
+  const bspc::Mesh clean = bspc::cleanMesh(mesh, weldingWithin(0), report);
+  CHECK(report.weldedVertices == 1);
+  CHECK(clean.triangles[1][0] == clean.triangles[0][0]);
+  CHECK(clean.triangles[2][0] != clean.triangles[0][0]);
+}
+
+TEST_CASE("weld is order-based: each vertex joins the first earlier vertex in reach",
+          "[compiler][clean]") {
+  const double tolerance = 0.01;
+  const Vector3d a(0, 0, 0), b(0.006, 0, 0), c(0.012, 0, 0);
+  bspc::CleanReport report;
+
+  SECTION("no chaining: c is within reach of b only, and b has joined a") {
+    bspc::Mesh mesh;
+    addFan(mesh, a, 1);
+    addFan(mesh, b, 2);
+    addFan(mesh, c, 3);
+    const bspc::Mesh clean = bspc::cleanMesh(mesh, weldingWithin(tolerance), report);
+    CHECK(report.weldedVertices == 1);
+    CHECK(corner(clean, 1, 0) == a);
+    CHECK(corner(clean, 2, 0) == c.cast<float>().cast<double>());
+  }
+  SECTION("the reverse order: b joins c, a stays") {
+    bspc::Mesh mesh;
+    addFan(mesh, c, 1);
+    addFan(mesh, b, 2);
+    addFan(mesh, a, 3);
+    const bspc::Mesh clean = bspc::cleanMesh(mesh, weldingWithin(tolerance), report);
+    CHECK(report.weldedVertices == 1);
+    CHECK(corner(clean, 1, 0) == c.cast<float>().cast<double>());
+    CHECK(corner(clean, 2, 0) == a);
+  }
+  SECTION("in reach of two earlier vertices: the first one wins") {
+    for (const bool cFirst : {false, true}) {
+      bspc::Mesh mesh;
+      addFan(mesh, cFirst ? c : a, 1);
+      addFan(mesh, cFirst ? a : c, 2);
+      addFan(mesh, b, 3);
+      const bspc::Mesh clean = bspc::cleanMesh(mesh, weldingWithin(tolerance), report);
+      INFO("c first: " << cFirst);
+      CHECK(report.weldedVertices == 1);
+      CHECK(clean.triangles[2][0] == clean.triangles[0][0]);
+      CHECK(corner(clean, 2, 0) == corner(clean, 0, 0));
+    }
+  }
+  SECTION("deterministic: the same input gives the same output") {
+    bspc::Mesh mesh;
+    for (int i = 0; i < 200; ++i)
+      addFan(mesh, Vector3d(0.003 * (i % 17), 0.004 * (i % 5), 0.002 * (i % 3)), i);
+    bspc::CleanReport again;
+    const bspc::Mesh first = bspc::cleanMesh(mesh, weldingWithin(tolerance), report);
+    const bspc::Mesh second = bspc::cleanMesh(mesh, weldingWithin(tolerance), again);
+    CHECK(first.vertices == second.vertices);
+    CHECK(first.triangles == second.triangles);
+    CHECK(report.weldedVertices == again.weldedVertices);
+    CHECK(report.weldedVertices > 0);
+  }
+}
+
+TEST_CASE("clean rounds positions to float as the blob stores them", "[compiler][clean]") {
+  const bspc::Mesh mesh = meshOf({{0.1, 0.2, 0.3}, {1.1, 0.2, 0.3}, {0.1, 1.2, 0.3}}, {{0, 1, 2}});
+  bspc::CleanReport report;
+  const bspc::Mesh clean = bspc::cleanMesh(mesh, {}, report);
+  for (int k = 0; k < 3; ++k)
+    CHECK(clean.vertices[k] == mesh.vertices[k].cast<float>().cast<double>());
+}
+
+// ==================================================================== drops
+
+TEST_CASE("degenerate triangles (a repeated index, also after the weld) are dropped and counted",
+          "[compiler][clean]") {
+  const bspc::Mesh mesh = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.00001, 0, 0}},
+                                 {{0, 1, 2}, {0, 0, 1}, {1, 2, 2}, {0, 1, 3}, {3, 2, 1}});
+  bspc::CleanReport report;
+  const bspc::Mesh clean = bspc::cleanMesh(mesh, {}, report);
+  CHECK(report.droppedDegenerate == 3);
+  CHECK(report.droppedZeroArea == 0);
+  CHECK(report.droppedDuplicate == 0);
+  CHECK(report.weldedVertices == 1);
+  REQUIRE(clean.triangles.size() == 2);
+  CHECK(report.outputTriangles == 2);
+  CHECK(report.inputTriangles == 5);
+  // The last triangle survives with its corner 3 welded onto vertex 0.
+  CHECK(clean.triangles[1][0] == clean.triangles[0][0]);
+}
+
+TEST_CASE("zero-area (collinear) and too-small triangles are dropped and counted; slivers kept",
+          "[compiler][clean]") {
+  const bspc::Mesh mesh =
+      meshOf({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0.5, 2e-12, 0}, {0.3, 2e-8, 0}, {0, 1, 0}},
+             {{0, 1, 2},    // collinear
+              {0, 1, 3},    // area 1e-12, below the 1e-10 default
+              {0, 1, 4},    // area 1e-8, a sliver: kept
+              {0, 1, 5}});  // ordinary
+  bspc::CleanReport report;
+  const bspc::Mesh clean = bspc::cleanMesh(mesh, {}, report);
+  CHECK(report.droppedZeroArea == 2);
+  CHECK(report.droppedDegenerate == 0);
+  REQUIRE(clean.triangles.size() == 2);
+  CHECK(corner(clean, 0, 2) == mesh.vertices[4].cast<float>().cast<double>());
+  CHECK(corner(clean, 1, 2) == mesh.vertices[5]);
+
+  SECTION("the minimum area is a setting") {
+    bspc::CleanSettings settings;
+    settings.minTriangleArea = 1e-6;
+    const bspc::Mesh stricter = bspc::cleanMesh(mesh, settings, report);
+    CHECK(report.droppedZeroArea == 3);
+    CHECK(stricter.triangles.size() == 1);
+  }
+  SECTION("minimum area 0 still drops exactly collinear corners") {
+    bspc::CleanSettings settings;
+    settings.minTriangleArea = 0;
+    const bspc::Mesh lenient = bspc::cleanMesh(mesh, settings, report);
+    CHECK(report.droppedZeroArea == 1);
+    CHECK(lenient.triangles.size() == 3);
+  }
+}
+
+TEST_CASE("duplicate triangles with the same winding (any rotation) are dropped",
+          "[compiler][clean]") {
+  const bspc::Mesh mesh =
+      meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}},
+             {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {0, 1, 2}, {4, 5, 3}});  // last: copies, welded
+  bspc::CleanReport report;
+  const bspc::Mesh clean = bspc::cleanMesh(mesh, {}, report);
+  CHECK(report.droppedDuplicate == 4);
+  REQUIRE(clean.triangles.size() == 1);
+  CHECK(clean.vertices.size() == 3);
+  CHECK(report.weldedVertices == 3);
+}
+
+TEST_CASE("the same corners with opposite winding are kept (a two-sided surface)",
+          "[compiler][clean]") {
+  const bspc::Mesh mesh =
+      meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}, {0, 2, 1}, {2, 1, 0}, {1, 0, 2}});
+  bspc::CleanReport report;
+  const bspc::Mesh clean = bspc::cleanMesh(mesh, {}, report);
+  // (2, 1, 0) and (1, 0, 2) are rotations of the back face (0, 2, 1).
+  CHECK(report.droppedDuplicate == 2);
+  REQUIRE(clean.triangles.size() == 2);
+  const Vector3d front =
+      (corner(clean, 0, 1) - corner(clean, 0, 0)).cross(corner(clean, 0, 2) - corner(clean, 0, 0));
+  const Vector3d back =
+      (corner(clean, 1, 1) - corner(clean, 1, 0)).cross(corner(clean, 1, 2) - corner(clean, 1, 0));
+  CHECK(front.dot(back) < 0);
+  CHECK(front.z() > 0);
+}
+
+TEST_CASE("unused vertices are dropped; the order of what remains is kept", "[compiler][clean]") {
+  // Vertex 0 is unused, vertex 4 only used by a degenerate triangle.
+  const bspc::Mesh mesh = meshOf({{9, 9, 9}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 5, 5}, {0, 0, 1}},
+                                 {{1, 2, 3}, {4, 4, 1}, {5, 3, 2}});
+  bspc::CleanReport report;
+  const bspc::Mesh clean = bspc::cleanMesh(mesh, {}, report);
+  CHECK(report.inputVertices == 6);
+  CHECK(report.outputVertices == 4);
+  REQUIRE(clean.vertices.size() == 4);
+  for (const Vector3d& v : clean.vertices) {
+    CHECK(v != Vector3d(9, 9, 9));
+    CHECK(v != Vector3d(5, 5, 5));
+  }
+  REQUIRE(clean.triangles.size() == 2);
+  CHECK(corner(clean, 0, 0) == mesh.vertices[1]);
+  CHECK(corner(clean, 0, 1) == mesh.vertices[2]);
+  CHECK(corner(clean, 0, 2) == mesh.vertices[3]);
+  CHECK(corner(clean, 1, 0) == mesh.vertices[5]);
+  CHECK(corner(clean, 1, 1) == mesh.vertices[3]);
+  CHECK(corner(clean, 1, 2) == mesh.vertices[2]);
+  for (const auto& t : clean.triangles)
+    for (const std::uint32_t v : t) CHECK(v < clean.vertices.size());
+}
+
+// ==================================================================== errors
+
+TEST_CASE("a non-finite coordinate is a CompileError", "[compiler][clean]") {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const double bad : {nan, inf, -inf, 1e39, -1e39, 1e300}) {
+    for (int axis = 0; axis < 3; ++axis) {
+      bspc::Mesh mesh =
+          meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{0, 1, 2}, {0, 2, 3}});
+      mesh.vertices[2][axis] = bad;
+      bspc::CleanReport report;
+      INFO("coordinate " << bad << " on axis " << axis);
+      CHECK_THROWS_AS(bspc::cleanMesh(mesh, {}, report), bspc::CompileError);
+      CHECK_THROWS_WITH(bspc::cleanMesh(mesh, {}, report), Catch::Contains("vertex 2"));
+    }
+  }
+}
+
+TEST_CASE("the largest finite float coordinates are accepted", "[compiler][clean]") {
+  const double big = 3.0e38;  // below FLT_MAX
+  const bspc::Mesh mesh = meshOf({{0, 0, 0}, {big, 0, 0}, {0, big, 0}}, {{0, 1, 2}});
+  bspc::CleanReport report;
+  bspc::Mesh clean;
+  CHECK_NOTHROW(clean = bspc::cleanMesh(mesh, {}, report));
+  CHECK(clean.triangles.size() == 1);
+}
+
+TEST_CASE("a vertex index out of range is a CompileError", "[compiler][clean]") {
+  for (const std::uint32_t bad : {3u, 4u, 0xFFFFFFFFu}) {
+    const bspc::Mesh mesh = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}, {0, bad, 1}});
+    bspc::CleanReport report;
+    INFO("index " << bad);
+    CHECK_THROWS_AS(bspc::cleanMesh(mesh, {}, report), bspc::CompileError);
+    CHECK_THROWS_WITH(bspc::cleanMesh(mesh, {}, report),
+                      Catch::Contains("triangle 1") && Catch::Contains("range"));
+  }
+}
+
+TEST_CASE("a mesh with no triangle left after cleaning is a CompileError saying so",
+          "[compiler][clean]") {
+  bspc::CleanReport report;
+  SECTION("all degenerate or zero-area") {
+    const bspc::Mesh mesh = meshOf({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0.00001, 0, 0}},
+                                   {{0, 1, 2}, {0, 0, 1}, {0, 3, 1}});
+    CHECK_THROWS_AS(bspc::cleanMesh(mesh, {}, report), bspc::CompileError);
+    CHECK_THROWS_WITH(bspc::cleanMesh(mesh, {}, report), Catch::Contains("no triangle"));
+  }
+  SECTION("no triangles at all") {
+    const bspc::Mesh mesh = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {});
+    CHECK_THROWS_AS(bspc::cleanMesh(mesh, {}, report), bspc::CompileError);
+    CHECK_THROWS_WITH(bspc::cleanMesh(mesh, {}, report), Catch::Contains("no triangle"));
+  }
+  SECTION("everything welds into one point") {
+    const bspc::Mesh mesh =
+        meshOf({{0, 0, 0}, {0.00002, 0, 0}, {0, 0.00002, 0}}, {{0, 1, 2}, {2, 1, 0}});
+    CHECK_THROWS_WITH(bspc::cleanMesh(mesh, {}, report), Catch::Contains("no triangle"));
+  }
+}
+
+TEST_CASE("the clean report counts what went in and what came out", "[compiler][clean]") {
+  const bspc::Mesh mesh =
+      meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {2, 0, 0}, {0, 0, 0}, {7, 7, 7}},
+             {{0, 1, 2}, {0, 2, 3}, {0, 0, 1}, {0, 1, 4}, {5, 1, 2}, {2, 1, 0}});
+  bspc::CleanReport report;
+  report.droppedDuplicate = 99;  // stale values are reset
+  const bspc::Mesh clean = bspc::cleanMesh(mesh, {}, report);
+  CHECK(report.inputVertices == 7);
+  CHECK(report.inputTriangles == 6);
+  CHECK(report.weldedVertices == 1);
+  CHECK(report.droppedDegenerate == 1);
+  CHECK(report.droppedZeroArea == 1);
+  CHECK(report.droppedDuplicate == 1);
+  CHECK(report.outputTriangles == 3);
+  CHECK(report.outputVertices == 4);
+  CHECK(clean.triangles.size() == 3);
+  CHECK(clean.vertices.size() == 4);
+}
