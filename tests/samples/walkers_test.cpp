@@ -1,0 +1,339 @@
+// The walkers sample's simulation (samples/walkers_sim.h) on the sample arena
+// and the shared levels, checked against the brush oracle: no agent centre is
+// ever strictly inside a solid.
+#include <bspc/compile.h>
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <fstream>
+#include <sstream>
+
+#include "support/brushes.h"
+#include "support/test_support.h"
+#include "walkers_sim.h"
+
+using bspf::Vec3;
+using bspf::test::Brush;
+using bspf::test::BrushSet;
+
+namespace {
+
+constexpr float kMargin = 1e-3f;
+
+// An axis-aligned box as a brush.
+Brush boxBrush(const Eigen::Vector3d& low, const Eigen::Vector3d& high) {
+  Brush b;
+  for (int a = 0; a < 3; ++a) {
+    b.push_back({Eigen::Vector3d::Unit(a), high[a]});
+    b.push_back({-Eigen::Vector3d::Unit(a), -low[a]});
+  }
+  return b;
+}
+
+// A compiled level with its brush oracle and spawn points.
+struct Level {
+  std::string name;
+  bspf::World world;
+  BrushSet brushes;
+  std::vector<Vec3> spawns;
+};
+
+Level loadLevel(const std::filesystem::path& dir, const std::string& name,
+                const std::filesystem::path& outDir) {
+  const std::filesystem::path blob = outDir / (name + ".bspf");
+  bspc::compileFile(dir / (name + ".obj"), blob, {});
+  bspf::OpenResult opened = bspf::openWorld(blob);
+  REQUIRE(opened);
+  const bspf::walkers::Points spawns = bspf::walkers::loadSpawns(dir / (name + ".spawns.txt"));
+  INFO(spawns.error);
+  REQUIRE(spawns);
+  return {name, *opened.world, BrushSet::load(dir / (name + ".brushes.txt")), spawns.points};
+}
+
+// Runs the crowd and counts agent centres inside a solid, over the start
+// positions and after every frame; keeps the first few as examples.
+struct Outcome {
+  long long inside = 0;
+  int grounded = 0, groundedOnSolid = 0;  // at the end: agents grounded, and on a brush
+  int agentsEverInside = 0;
+  std::string examples;
+  bspf::walkers::Summary summary;
+  double seconds = 0;
+};
+
+Outcome walk(const Level& level, std::span<const Vec3> starts,
+             const bspf::walkers::Options& options) {
+  Outcome out;
+  std::vector<bool> everInside(starts.size(), false);
+  auto check = [&](int frame, std::span<const bspf::Body> bodies) {
+    for (std::size_t i = 0; i < bodies.size(); ++i) {
+      const Vec3& p = bodies[i].position;
+      const int solid = level.brushes.findSolid(p, kMargin);
+      if (solid < 0) continue;
+      ++out.inside;
+      if (!everInside[i]) ++out.agentsEverInside;
+      everInside[i] = true;
+      if (out.inside <= 5) {
+        std::ostringstream line;
+        line.precision(9);
+        line << "\n  frame " << frame << " agent " << i << " at (" << p.x() << ", " << p.y() << ", "
+             << p.z() << ") inside brush " << solid << " (velocity "
+             << bodies[i].velocity.transpose() << ")";
+        out.examples += line.str();
+      }
+    }
+  };
+  const auto start = std::chrono::steady_clock::now();
+  bspf::walkers::Simulation sim(level.world, starts, options);
+  check(-1, sim.bodies());
+  for (int f = 0; f < options.frames; ++f) {
+    sim.step();
+    check(f, sim.bodies());
+  }
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.summary = sim.summary();
+  // The oracle is not vacuous: most grounded agents stand on a brush (the
+  // rest on curved patches, which have none), so a solid lies just under
+  // their feet.
+  for (std::size_t i = 0; i < sim.bodies().size(); ++i) {
+    if (!sim.reports()[i].grounded) continue;
+    ++out.grounded;
+    const Vec3 below = sim.bodies()[i].position - Vec3(0, options.radii.y + 0.1f, 0);
+    out.groundedOnSolid += level.brushes.insideAnySolid(below, kMargin);
+  }
+  return out;
+}
+
+// Every level the walkers test runs on: the sample arena, then the shared
+// levels when ../shared/levels is present.
+std::vector<Level> allLevels(const std::filesystem::path& outDir) {
+  std::vector<Level> levels;
+  levels.push_back(loadLevel(bspf::test::samplesDir(), "arena", outDir));
+  const auto shared = bspf::test::sharedLevelsDir();
+  if (!std::filesystem::exists(shared)) {
+    WARN("shared levels skipped: " << shared << " is absent (a user's clone has no ../shared)");
+    return levels;
+  }
+  for (const std::string& name : bspf::test::sharedLevelNames())
+    levels.push_back(loadLevel(shared, name, outDir));
+  return levels;
+}
+
+}  // namespace
+
+TEST_CASE("the brush oracle tells points inside a solid from points outside",
+          "[samples][walkers][brushes]") {
+  SECTION("a box") {
+    const BrushSet set({boxBrush({0, 0, 0}, {2, 1, 3})});
+    REQUIRE(set.size() == 1);
+    REQUIRE(set.bounds(0).min().isApprox(Eigen::Vector3d(-0.01, -0.01, -0.01)));
+    REQUIRE(set.insideAnySolid(Vec3(1, 0.5f, 1.5f), kMargin));
+    REQUIRE(set.insideAnySolid(Vec3(0.01f, 0.01f, 2.99f), kMargin));
+    REQUIRE_FALSE(set.insideAnySolid(Vec3(3, 0.5f, 1.5f), kMargin));
+    REQUIRE_FALSE(set.insideAnySolid(Vec3(1, -0.5f, 1.5f), kMargin));
+    REQUIRE_FALSE(set.insideAnySolid(Vec3(1, 0.5f, 3.2f), kMargin));
+    REQUIRE_FALSE(set.insideAnySolid(Vec3(-100, 100, 0), kMargin));
+    // On a face, or within the margin of it: not inside.
+    REQUIRE_FALSE(set.insideAnySolid(Vec3(2, 0.5f, 1.5f), kMargin));
+    REQUIRE_FALSE(set.insideAnySolid(Vec3(1, 0.9995f, 1.5f), kMargin));
+    REQUIRE(set.insideAnySolid(Vec3(1, 0.9995f, 1.5f), 0.0f));
+    REQUIRE(set.findSolid(Vec3(1, 0.5f, 1.5f), kMargin) == 0);
+  }
+  SECTION("a slanted wedge, and many boxes against a brute-force check") {
+    // A wedge: floor y > 0, x in 0..4, z in 0..1, under the plane rising at
+    // 45 degrees along +x (y < x).
+    Brush wedge = boxBrush({0, 0, 0}, {4, 4, 1});
+    wedge.push_back({Eigen::Vector3d(-1, 1, 0).normalized(), 0});
+    std::vector<Brush> brushes{wedge};
+    bspf::walkers::Random rng(7);
+    for (int i = 0; i < 300; ++i) {
+      const Eigen::Vector3d low(rng.uniform(-50, 50), rng.uniform(-5, 5), rng.uniform(-50, 50));
+      brushes.push_back(boxBrush(
+          low,
+          low + Eigen::Vector3d(rng.uniform(0.1f, 6), rng.uniform(0.1f, 3), rng.uniform(0.1f, 6))));
+    }
+    brushes.push_back(boxBrush({-200, -20, -200}, {200, -19, 200}));  // spans many cells
+    const BrushSet set(brushes);
+    const BrushSet wedgeOnly({wedge});
+    REQUIRE(wedgeOnly.insideAnySolid(Vec3(3, 1, 0.5f), kMargin));
+    REQUIRE_FALSE(wedgeOnly.insideAnySolid(Vec3(1, 3, 0.5f), kMargin));  // above the slope
+    REQUIRE(wedgeOnly.bounds(0).max().y() == Approx(4.01));
+    REQUIRE(set.findSolid(Vec3(0, -19.5f, 100), kMargin) == int(brushes.size()) - 1);
+    for (int i = 0; i < 20000; ++i) {
+      const Vec3 p(rng.uniform(-60, 60), rng.uniform(-22, 10), rng.uniform(-60, 60));
+      int expected = -1;
+      for (std::size_t b = 0; b < brushes.size() && expected < 0; ++b) {
+        bool in = true;
+        for (const auto& plane : brushes[b])
+          in = in && plane.normal.dot(p.cast<double>()) < plane.distance - kMargin;
+        if (in) expected = int(b);
+      }
+      INFO("point " << p.transpose());
+      REQUIRE(set.findSolid(p, kMargin) == expected);
+    }
+  }
+  SECTION("loaded from a file; malformed files are refused naming the line") {
+    const std::filesystem::path dir = bspf::test::freshTempDir("brushes");
+    {
+      std::ofstream good(dir / "good.brushes.txt");
+      good << "1 0 0 1 -1 0 0 1 0 1 0 1 0 -1 0 1 0 0 1 1 0 0 -1 1\n\n"
+              "1 0 0 11 -1 0 0 -9 0 1 0 1 0 -1 0 1 0 0 1 1 0 0 -1 1\n";
+      std::ofstream bad(dir / "bad.brushes.txt");
+      bad << "1 0 0 1 -1 0 0 1\n1 0 0\n";
+    }
+    const BrushSet set = BrushSet::load(dir / "good.brushes.txt");
+    REQUIRE(set.size() == 2);
+    REQUIRE(set.findSolid(Vec3(0, 0, 0), kMargin) == 0);
+    REQUIRE(set.findSolid(Vec3(10, 0, 0), kMargin) == 1);
+    REQUIRE_FALSE(set.insideAnySolid(Vec3(5, 0, 0), kMargin));
+    REQUIRE_THROWS_WITH(BrushSet::load(dir / "bad.brushes.txt"),
+                        Catch::Contains("line 2") && Catch::Contains("groups of four"));
+    REQUIRE_THROWS_WITH(BrushSet::load(dir / "absent.brushes.txt"), Catch::Contains("cannot open"));
+  }
+}
+
+TEST_CASE("the sample levels' brushes hold no spawn and the body at each spawn is clear",
+          "[samples][walkers][brushes]") {
+  for (const std::string name : {"arena", "box_room", "slopes"}) {
+    const BrushSet set = BrushSet::load(bspf::test::samplesDir() / (name + ".brushes.txt"));
+    const auto spawns =
+        bspf::walkers::loadSpawns(bspf::test::samplesDir() / (name + ".spawns.txt"));
+    REQUIRE(spawns);
+    for (const Vec3& s : spawns.points) {
+      REQUIRE_FALSE(set.insideAnySolid(s, kMargin));
+      // The floor 0.75 m below the spawn is inside one.
+      REQUIRE(set.insideAnySolid(s - Vec3(0, 0.76f, 0), kMargin));
+    }
+  }
+}
+
+TEST_CASE("walkers: spawn files, options, placement and determinism", "[samples][walkers]") {
+  const std::filesystem::path dir = bspf::test::freshTempDir("walkers");
+  SECTION("spawn files") {
+    {
+      std::ofstream(dir / "good.txt") << "1 2 3\n\n# comment\n-4.5 0.75 6e1\n";
+      std::ofstream(dir / "bad.txt") << "1 2 3\n1 2\n";
+      std::ofstream(dir / "extra.txt") << "1 2 3 4\n";
+      std::ofstream(dir / "empty.txt") << "\n";
+    }
+    const auto good = bspf::walkers::loadSpawns(dir / "good.txt");
+    REQUIRE(good);
+    REQUIRE(good.points.size() == 2);
+    REQUIRE(good.points[1] == Vec3(-4.5f, 0.75f, 60));
+    const auto starts = bspf::walkers::startsFromSpawns(good.points, 5);
+    REQUIRE(starts.size() == 5);
+    REQUIRE(starts[3] == Vec3(-4.5f, 0.75f + bspf::walkers::kSpawnLift, 60));
+    const auto bad = bspf::walkers::loadSpawns(dir / "bad.txt");
+    REQUIRE_FALSE(bad);
+    REQUIRE_THAT(bad.error, Catch::Contains("bad.txt") && Catch::Contains("line 2"));
+    REQUIRE_FALSE(bspf::walkers::loadSpawns(dir / "extra.txt"));
+    REQUIRE_THAT(bspf::walkers::loadSpawns(dir / "empty.txt").error,
+                 Catch::Contains("no spawn point"));
+    REQUIRE_THAT(bspf::walkers::loadSpawns(dir / "absent.txt").error,
+                 Catch::Contains("cannot open"));
+  }
+  SECTION("options") {
+    bspf::walkers::Options o;
+    REQUIRE(bspf::walkers::validate(o).empty());
+    o.agents = 0;
+    REQUIRE_THAT(bspf::walkers::validate(o), Catch::Contains("--agents"));
+    o = {};
+    o.dt = 0;
+    REQUIRE_THAT(bspf::walkers::validate(o), Catch::Contains("--dt"));
+    o.dt = std::nanf("");
+    REQUIRE_THAT(bspf::walkers::validate(o), Catch::Contains("--dt"));
+    o = {};
+    o.speed = -1;
+    REQUIRE_THAT(bspf::walkers::validate(o), Catch::Contains("--speed"));
+    o = {};
+    o.radii.y = 0;
+    REQUIRE_THAT(bspf::walkers::validate(o), Catch::Contains("--radius-y"));
+  }
+  SECTION("placement on floor and determinism, on the arena") {
+    const Level level = loadLevel(bspf::test::samplesDir(), "arena", dir);
+    bspf::walkers::Options options;
+    options.agents = 32;
+    options.frames = 120;
+    options.seed = 5;
+    const auto placed =
+        bspf::walkers::placeOnFloor(level.world, options.agents, options.radii, 5, "arena");
+    INFO(placed.error);
+    REQUIRE(placed);
+    REQUIRE(placed.points.size() == 32);
+    const auto again =
+        bspf::walkers::placeOnFloor(level.world, options.agents, options.radii, 5, "arena");
+    REQUIRE(again.points == placed.points);
+    bspf::SweepScratch scratch;
+    std::vector<std::uint32_t> candidates;
+    for (const Vec3& p : placed.points) {
+      INFO("placed at " << p.transpose());
+      // Inside the walls, outside every solid, the body clear of the level.
+      REQUIRE(std::abs(p.x()) < 19);
+      REQUIRE(std::abs(p.z()) < 19);
+      REQUIRE_FALSE(level.brushes.insideAnySolid(p, kMargin));
+      REQUIRE(bspf::walkers::detail::bodyClear(level.world, p, options.radii, scratch, candidates));
+    }
+    // The same inputs give the same walk, frame by frame; another seed not.
+    bspf::walkers::Simulation a(level.world, placed.points, options);
+    bspf::walkers::Simulation b(level.world, placed.points, options);
+    options.seed = 6;
+    bspf::walkers::Simulation c(level.world, placed.points, options);
+    bool differs = false;
+    for (int f = 0; f < options.frames; ++f) {
+      a.step();
+      b.step();
+      c.step();
+      for (std::size_t i = 0; i < placed.points.size(); ++i) {
+        REQUIRE(a.bodies()[i].position == b.bodies()[i].position);
+        differs = differs || a.bodies()[i].position != c.bodies()[i].position;
+      }
+    }
+    REQUIRE(differs);
+    REQUIRE(a.summary().steps == 32 * 120);
+    REQUIRE(a.summary().nsPerStep > 0);
+    // They walk: most of them went some way from where they started.
+    int moved = 0;
+    for (std::size_t i = 0; i < placed.points.size(); ++i)
+      moved += (a.bodies()[i].position - placed.points[i]).norm() > 1;
+    REQUIRE(moved > 16);
+  }
+  SECTION("a level with no floor refuses placement") {
+    bspc::Mesh wall = bspf::test::boxMesh({0, 0, 0}, {0.1, 3, 3});
+    bspf::test::AlignedBytes bytes(bspf::test::compile(wall));
+    const bspf::World world = *bspf::viewWorld(bytes.span()).world;
+    // Its top face is walkable, but a body there is out in the void.
+    const auto placed = bspf::walkers::placeOnFloor(world, 4, {0.45f, 0.85f}, 1, "wall");
+    REQUIRE_FALSE(placed);
+    REQUIRE_THAT(placed.error, Catch::Contains("wall") && Catch::Contains("--spawns"));
+  }
+}
+
+TEST_CASE("walkers at 6 and 40 m/s never end inside a solid, on the arena and shared levels",
+          "[samples][walkers]") {
+  const std::filesystem::path outDir = bspf::test::freshTempDir("walkers-levels");
+  const std::vector<Level> levels = allLevels(outDir);
+  for (const Level& level : levels) {
+    bspf::walkers::Options options;
+    // Starts from the level's spawn points, and from random open floor.
+    const std::vector<Vec3> fromSpawns =
+        bspf::walkers::startsFromSpawns(level.spawns, options.agents);
+    const bspf::walkers::Points onFloor = bspf::walkers::placeOnFloor(
+        level.world, options.agents, options.radii, options.seed, level.name);
+    INFO(onFloor.error);
+    REQUIRE(onFloor);
+    for (const auto& [placement, starts] :
+         {std::pair{"spawns", fromSpawns}, std::pair{"floor", onFloor.points}}) {
+      for (const float speed : {6.0f, 40.0f}) {
+        options.speed = speed;
+        const Outcome out = walk(level, starts, options);
+        INFO(level.name << " from " << placement << " at " << speed << " m/s: " << out.inside
+                        << " agent-frames inside a solid (" << out.agentsEverInside << " of "
+                        << options.agents << " agents); refused " << out.summary.refusedMoves
+                        << ", " << out.seconds << " s" << out.examples);
+        CHECK(out.inside == 0);
+        INFO(out.groundedOnSolid << " of " << out.grounded << " grounded agents on a brush");
+        CHECK(out.groundedOnSolid * 2 > out.grounded);
+      }
+    }
+  }
+}
