@@ -1,5 +1,6 @@
 #include <bspf/movement.h>
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -84,15 +85,50 @@ std::optional<Hit> findBlockingTriangle(const World& world, const Vec3& start, c
   return best;
 }
 
+// A surface the end was moved out of this step: the end must keep
+// dot(normal, end) >= target, and is moved along `push` to get there.
+struct Constraint {
+  Vec3 normal;
+  float target;
+  Vec3 push;
+};
+
+float violation(const Constraint& c, const Vec3& end) { return c.target - c.normal.dot(end); }
+
+// Moves `end` along the push directions of `set` (2 or 3 constraints) so it
+// lies on all of them at once: the crease or corner they form. Returns false
+// (and leaves `end`) when they are too close to parallel to meet, or when
+// meeting them would pull the end into any of them.
+template <int N>
+bool meetConstraints(const std::array<const Constraint*, N>& set, Vec3& end) {
+  Eigen::Matrix<float, N, N> m;
+  Eigen::Matrix<float, N, 1> need;
+  for (int r = 0; r < N; ++r) {
+    for (int c = 0; c < N; ++c) m(r, c) = set[r]->normal.dot(set[c]->push);
+    need(r) = violation(*set[r], end);
+  }
+  const Eigen::FullPivLU<Eigen::Matrix<float, N, N>> lu(m);
+  if (!lu.isInvertible() || std::abs(lu.determinant()) < 1e-3f) return false;
+  const Eigen::Matrix<float, N, 1> amount = lu.solve(need);
+  if ((amount.array() < -1e-4f).any()) return false;
+  for (int c = 0; c < N; ++c) end += amount(c) * set[c]->push;
+  return true;
+}
+
 // Moves the end out of blocking triangles until none blocks, or refuses the
 // move after maxIterations slides. Walkable contacts push the end straight
 // up rather than along the normal, so a body standing on a slope does not
-// creep down it.
+// creep down it. When moving out of one surface puts the end back into a
+// surface of an earlier slide (a crease, or a corner of three), the end goes
+// to where they meet at once instead of bouncing between them, which would
+// use up the iterations and refuse the move.
 SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,
                               EllipsoidRadii radii, const MovementSettings& settings,
                               float walkableNormalY, StepScratch& scratch) {
   SlideResult result;
   result.end = desiredEnd;
+  std::array<Constraint, kMaxReportedContacts> constraints;
+  int constraintCount = 0;
   for (int iteration = 0;; ++iteration) {
     collectCandidateTriangles(world, start, result.end, radii, scratch.sweep, scratch.candidates);
     const std::optional<Hit> hit =
@@ -105,13 +141,28 @@ SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3&
     }
     const schema::Plane& face = world.trianglePlanes()[hit->triangle].face();
     const Vec3 normal = toVec3(face.normal());
-    const float depth =
-        effectiveRadius(normal, radii) + settings.skin - signedDistance(face, result.end);
     const bool walkable = normal.y() >= walkableNormalY;
-    if (walkable)
-      result.end.y() += depth / normal.y();
-    else
-      result.end += normal * depth;
+    const Constraint added{normal, face.distance() + effectiveRadius(normal, radii) + settings.skin,
+                           walkable ? Vec3::UnitY() : normal};
+    result.end += added.push * (violation(added, result.end) / normal.dot(added.push));
+
+    // The most recent earlier surfaces the end is back inside, if any.
+    const Constraint* back[2] = {nullptr, nullptr};
+    for (int i = constraintCount - 1; i >= 0 && !back[1]; --i) {
+      if (violation(constraints[i], result.end) <= 1e-5f) continue;
+      if (constraints[i].normal.dot(normal) > 0.9999f) continue;  // the same surface
+      (back[0] ? back[1] : back[0]) = &constraints[i];
+    }
+    if (back[0]) {
+      Vec3 meet = result.end;
+      if (meetConstraints<2>({&added, back[0]}, meet)) {
+        result.end = meet;
+        if (back[1] && violation(*back[1], meet) > 1e-5f &&
+            meetConstraints<3>({&added, back[0], back[1]}, meet))
+          result.end = meet;
+      }
+    }
+    if (constraintCount < kMaxReportedContacts) constraints[constraintCount++] = added;
     ++result.iterations;
     if (result.contactCount < kMaxReportedContacts)
       result.contacts[result.contactCount++] = {normal, walkable};
@@ -273,8 +324,15 @@ void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3
                   world, body->position, body->position + sign * half * apart, body->radii,
                   body->settings, walkableNormalY(body->settings), scratch);
               body->position = push.end;
-              const float closing = body->velocity.dot(sign * apart);
-              if (closing < 0) body->velocity -= closing * sign * apart;
+              // Only the horizontal closing speed is removed: removing it
+              // along a tilted line between centres would turn a fast
+              // body's run into a jump over the other's shoulder.
+              Vec3 away(sign * apart.x(), 0, sign * apart.z());
+              if (away.squaredNorm() > 1e-8f) {
+                away.normalize();
+                const float closing = body->velocity.dot(away);
+                if (closing < 0) body->velocity -= closing * away;
+              }
               if (StepReport* r = reportOf(index)) {
                 record(r, push, false);
                 ++r->bodyContacts;
