@@ -1,4 +1,4 @@
-#include "support/brushes.h"
+#include "brushes.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace bspf::test {
+namespace bspf::walkers {
 
 namespace {
 
@@ -181,4 +181,4 @@ int BrushSet::findSolid(const Vec3& point, float margin) const {
   return found;
 }
 
-}  // namespace bspf::test
+}  // namespace bspf::walkers

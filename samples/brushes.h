@@ -1,6 +1,7 @@
-// Brush oracle for tests: the solids of a level as convex sets of planes
+// brushes.h: the brush oracle, the solids of a level as convex sets of planes
 // (the `.brushes.txt` files beside the sample and shared levels), answering
-// whether a point lies strictly inside any of them.
+// whether a point lies strictly inside any of them. Used by the `walkers`
+// sample (--brushes) and by its tests; needs the runtime's Vec3 and Eigen only.
 //
 // File format: one brush a line, groups of four numbers `nx ny nz d` with a
 // unit normal pointing out; p is inside the brush when n·p < d for every
@@ -14,7 +15,7 @@
 #include <filesystem>
 #include <vector>
 
-namespace bspf::test {
+namespace bspf::walkers {
 
 /// One plane of a brush: the brush lies where normal·p < distance.
 struct BrushPlane {
@@ -67,4 +68,4 @@ class BrushSet {
   std::vector<std::uint32_t> everywhere_;
 };
 
-}  // namespace bspf::test
+}  // namespace bspf::walkers

@@ -3,13 +3,18 @@
 //
 //   walkers LEVEL.bspf [--spawns FILE] [--agents N] [--frames F] [--speed M_PER_S]
 //           [--seed K] [--dt S] [--radius-xz R] [--radius-y R] [--trace OUT.csv] [--json]
+//           [--brushes FILE]
 //
 // Each agent walks in a random direction (a new one every 0.5 to 2 s) at
 // --speed, under gravity; all agents step together through bspf::stepBodies,
 // so they also push each other apart. Agents start 0.3 m above the spawn
 // points (round robin) or, without --spawns, on random open walkable floor.
 // Prints a summary (or one JSON object with --json); --trace writes every
-// agent's centre after every frame. Same inputs and seed, same trace.
+// agent's centre after every frame. With --brushes (the level's solids as
+// planes, a `.brushes.txt` file) it counts, after every frame and outside the
+// timed region, the agents whose centre is inside a solid (by more than 1 mm):
+// 0 when the movement step never lets a body into a wall. Same inputs and
+// seed, same trace.
 //
 // Links the runtime only (never the compiler or assimp).
 #include <CLI/CLI.hpp>
@@ -17,7 +22,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <system_error>
 
@@ -60,7 +67,7 @@ std::string exact(float v) {
 int main(int argc, char** argv) {
   CLI::App app{"walkers: random-walking ellipsoid bodies in a compiled .bspf level", "walkers"};
   bspf::walkers::Options options;
-  std::string levelPath, spawnsPath, tracePath;
+  std::string levelPath, spawnsPath, tracePath, brushesPath;
   bool json = false;
   app.add_option("level", levelPath, "The compiled level (.bspf)")->required();
   app.add_option("--spawns", spawnsPath,
@@ -78,6 +85,9 @@ int main(int argc, char** argv) {
   app.add_option("--trace", tracePath,
                  "Write 'frame,agent,x,y,z' (every centre after every frame) to this CSV");
   app.add_flag("--json", json, "Print one JSON object instead of a summary");
+  app.add_option("--brushes", brushesPath,
+                 "The level's solids as planes (a .brushes.txt file); counts agents whose centre "
+                 "is inside one, after every frame");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -90,6 +100,15 @@ int main(int argc, char** argv) {
   const bspf::OpenResult opened = bspf::openWorld(levelPath);
   if (!opened) return fail(opened.message);
   const bspf::World& world = *opened.world;
+
+  std::optional<bspf::walkers::BrushSet> brushes;
+  if (!brushesPath.empty()) {
+    try {
+      brushes = bspf::walkers::BrushSet::load(brushesPath);
+    } catch (const std::exception& e) {
+      return fail(e.what());  // names the file (and the line)
+    }
+  }
 
   bspf::walkers::Points starts;
   if (!spawnsPath.empty()) {
@@ -113,8 +132,10 @@ int main(int argc, char** argv) {
   }
 
   bspf::walkers::Simulation sim(world, starts.points, options);
+  long long insideSolid = 0;  // agent-frames with the centre inside a solid
   for (int frame = 0; frame < options.frames; ++frame) {
     sim.step();  // times stepBodies only
+    if (brushes) insideSolid += bspf::walkers::countInsideSolid(*brushes, sim.bodies());
     if (trace.is_open()) {
       const auto bodies = sim.bodies();
       for (std::size_t i = 0; i < bodies.size(); ++i) {
@@ -156,7 +177,7 @@ int main(int argc, char** argv) {
         << ", \"iterations_max\": " << s.iterationsMax
         << ", \"grounded_fraction\": " << s.groundedFraction
         << ", \"body_contacts_mean\": " << s.bodyContactsMean << ", \"fell_out\": " << fellOut
-        << "}\n";
+        << ", \"inside_solid\": " << (brushes ? std::to_string(insideSolid) : "null") << "}\n";
     std::cout << out.str();
   } else {
     std::printf("walkers: %s: %d agents x %d frames at %g m/s (dt %g s, placement %s)\n",
@@ -167,6 +188,8 @@ int main(int argc, char** argv) {
                 s.refusedMoves, s.iterationsMean, s.iterationsMax, 100 * s.groundedFraction);
     std::printf("  body contacts per step %.3f, fell out of the level %d\n", s.bodyContactsMean,
                 fellOut);
+    if (brushes)
+      std::printf("  inside a solid of %s: %lld agent-frames\n", brushesPath.c_str(), insideSolid);
     if (!tracePath.empty()) std::printf("  trace: %s\n", tracePath.c_str());
   }
   return 0;

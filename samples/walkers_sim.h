@@ -9,7 +9,9 @@
 // output differs between standard libraries).
 //
 // Start positions come from a spawn file (startsFromSpawns) or are chosen on
-// walkable floor (placeOnFloor). Only the runtime is used: no compiler.
+// walkable floor (placeOnFloor). countInsideSolid checks centres against the
+// level's brushes (brushes.h, the bspf::brushes library). Only the runtime is
+// used: no compiler.
 #pragma once
 
 #include <bspf/movement.h>
@@ -28,6 +30,8 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "brushes.h"
 
 namespace bspf::walkers {
 
@@ -322,6 +326,18 @@ inline Points placeOnFloor(const World& world, int agents, EllipsoidRadii radii,
                    std::to_string(result.points.size()) + " of " + std::to_string(agents) +
                    " agents (give --spawns)";
   return result;
+}
+
+/// How deep, metres, a centre must be inside a solid to count as inside: a
+/// body resting on a face is within float noise of it, not inside.
+inline constexpr float kInsideMargin = 1e-3f;
+
+/// How many of `bodies` have their centre inside some solid of `brushes` by
+/// more than kInsideMargin.
+inline int countInsideSolid(const BrushSet& brushes, std::span<const Body> bodies) {
+  int inside = 0;
+  for (const Body& b : bodies) inside += brushes.insideAnySolid(b.position, kInsideMargin);
+  return inside;
 }
 
 /// Figures of a run so far.

@@ -1,6 +1,6 @@
 // The walkers sample's simulation (samples/walkers_sim.h) on the sample arena
 // and the shared levels, checked against the brush oracle: no agent centre is
-// ever strictly inside a solid.
+// ever strictly inside a solid; and the walkers program's --brushes option.
 #include <bspc/compile.h>
 
 #include <catch2/catch.hpp>
@@ -8,17 +8,17 @@
 #include <fstream>
 #include <sstream>
 
-#include "support/brushes.h"
+#include "brushes.h"
 #include "support/test_support.h"
 #include "walkers_sim.h"
 
 using bspf::Vec3;
-using bspf::test::Brush;
-using bspf::test::BrushSet;
+using bspf::walkers::Brush;
+using bspf::walkers::BrushSet;
 
 namespace {
 
-constexpr float kMargin = 1e-3f;
+constexpr float kMargin = bspf::walkers::kInsideMargin;
 
 // An axis-aligned box as a brush.
 Brush boxBrush(const Eigen::Vector3d& low, const Eigen::Vector3d& high) {
@@ -334,6 +334,93 @@ TEST_CASE("walkers at 6 and 40 m/s never end inside a solid, on the arena and sh
         INFO(out.groundedOnSolid << " of " << out.grounded << " grounded agents on a brush");
         CHECK(out.groundedOnSolid * 2 > out.grounded);
       }
+    }
+  }
+}
+
+namespace {
+
+std::string quoted(const std::filesystem::path& path) {
+  std::string out = "'";
+  for (const char c : path.string()) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+bspf::test::CommandResult runWalkers(const std::string& arguments) {
+  return bspf::test::run(quoted(WALKERS_EXECUTABLE) + " " + arguments);
+}
+
+// The value of `key` in walkers' one-line JSON, as text ("" when absent).
+std::string jsonValue(const std::string& json, const std::string& key) {
+  const std::string tag = "\"" + key + "\": ";
+  const std::size_t at = json.find(tag);
+  if (at == std::string::npos) return {};
+  const std::size_t from = at + tag.size();
+  return json.substr(from, json.find_first_of(",}", from) - from);
+}
+
+}  // namespace
+
+TEST_CASE("walkers --brushes counts the agent-frames inside a solid", "[samples][walkers]") {
+  const std::filesystem::path dir = bspf::test::freshTempDir("walkers-brushes");
+  const std::filesystem::path samples = bspf::test::samplesDir();
+  bspc::compileFile(samples / "box_room.obj", dir / "box_room.bspf", {});
+  const std::string common = quoted(dir / "box_room.bspf") + " --spawns " +
+                             quoted(samples / "box_room.spawns.txt") +
+                             " --agents 8 --frames 60 --json";
+
+  SECTION("the level's own brushes: no agent ever inside") {
+    const auto r = runWalkers(common + " --brushes " + quoted(samples / "box_room.brushes.txt"));
+    INFO(r.err << r.out);
+    REQUIRE(r.status == 0);
+    REQUIRE(jsonValue(r.out, "steps") == "480");
+    REQUIRE(jsonValue(r.out, "inside_solid") == "0");
+  }
+  SECTION("without --brushes the count is null") {
+    const auto r = runWalkers(common);
+    INFO(r.err << r.out);
+    REQUIRE(r.status == 0);
+    REQUIRE(jsonValue(r.out, "inside_solid") == "null");
+  }
+  SECTION("a brush over one spawn, and one filling the room") {
+    // Spawn 0 is at (0, 0.75, 0); agents 0 and 4 start 0.3 m above it and
+    // walk out of a 0.6 m column around it within a few frames.
+    std::ofstream(dir / "spawn.brushes.txt")
+        << "1 0 0 0.3 -1 0 0 0.3 0 1 0 3 0 -1 0 0 0 0 1 0.3 0 0 -1 0.3\n";
+    // The room's inside less 0.1 m: every centre is in it, every frame.
+    std::ofstream(dir / "room.brushes.txt")
+        << "1 0 0 2.9 -1 0 0 2.9 0 1 0 2.9 0 -1 0 -0.1 0 0 1 2.9 0 0 -1 2.9\n";
+    const auto spawn = runWalkers(common + " --brushes " + quoted(dir / "spawn.brushes.txt"));
+    INFO(spawn.err << spawn.out);
+    REQUIRE(spawn.status == 0);
+    const long long inside = std::stoll(jsonValue(spawn.out, "inside_solid"));
+    REQUIRE(inside > 0);
+    REQUIRE(inside < 480);
+    const auto room = runWalkers(common + " --brushes " + quoted(dir / "room.brushes.txt"));
+    INFO(room.err << room.out);
+    REQUIRE(room.status == 0);
+    REQUIRE(jsonValue(room.out, "inside_solid") == "480");
+    // The text summary says it too.
+    const std::string text =
+        quoted(dir / "box_room.bspf") + " --spawns " + quoted(samples / "box_room.spawns.txt") +
+        " --agents 8 --frames 60 --brushes " + quoted(dir / "room.brushes.txt");
+    const auto summary = runWalkers(text);
+    INFO(summary.err << summary.out);
+    REQUIRE(summary.status == 0);
+    REQUIRE_THAT(summary.out, Catch::Contains("inside a solid") && Catch::Contains("480"));
+  }
+  SECTION("a bad brush file is one error line naming it, and no output") {
+    std::ofstream(dir / "bad.brushes.txt") << "1 0 0 1 -1 0 0 1\n0 1 0\n";
+    for (const auto& [file, reason] :
+         {std::pair{dir / "bad.brushes.txt", std::string("line 2")},
+          std::pair{dir / "absent.brushes.txt", std::string("cannot open")}}) {
+      const auto r = runWalkers(common + " --brushes " + quoted(file));
+      INFO(r.err << r.out);
+      REQUIRE(r.status != 0);
+      REQUIRE(r.out.empty());
+      REQUIRE_THAT(r.err, Catch::StartsWith("walkers: error: " + file.string() + ": ") &&
+                              Catch::Contains(reason) && Catch::EndsWith("\n"));
+      REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
     }
   }
 }
