@@ -145,28 +145,6 @@ inline std::vector<Vec3> startsFromSpawns(std::span<const Vec3> spawns, int agen
 
 namespace detail {
 
-// Closest point of triangle abc to p (Ericson, Real-Time Collision Detection).
-inline Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 ab = b - a, ac = c - a, ap = p - a;
-  const float d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const Vec3 bp = p - b;
-  const float d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const float vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
-  const Vec3 cp = p - c;
-  const float d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const float vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
-  const float va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-    return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-  const float denom = 1.0f / (va + vb + vc);
-  return a + ab * (vb * denom) + ac * (vc * denom);
-}
-
 inline void triangleVertices(const World& world, std::uint32_t t, Vec3& a, Vec3& b, Vec3& c) {
   const schema::Triangle& tri = world.triangles()[t];
   a = toVec3(world.vertices()[tri.v0()]);
@@ -184,8 +162,8 @@ inline bool bodyClear(const World& world, const Vec3& centre, EllipsoidRadii rad
   for (const std::uint32_t t : candidates) {
     Vec3 a, b, c;
     triangleVertices(world, t, a, b, c);
-    const Vec3 q = closestPointOnTriangle(p, a.cwiseProduct(scale), b.cwiseProduct(scale),
-                                          c.cwiseProduct(scale));
+    const Vec3 q = closestPointOnTriangle<Vec3>(p, a.cwiseProduct(scale), b.cwiseProduct(scale),
+                                                c.cwiseProduct(scale));
     if ((q - p).squaredNorm() <= 1.0f) return false;
   }
   return true;

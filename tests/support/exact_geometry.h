@@ -8,9 +8,8 @@
 
 namespace bspf::test {
 
-/// The point of triangle abc closest to p.
-Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c);
+// Closest points on triangles: bspf::closestPointOnTriangle (geometry.h),
+// used here in double precision.
 
 /// Squared distance between segments p0p1 and q0q1.
 double segmentSegmentDistance2(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,

@@ -45,4 +45,31 @@ inline float effectiveRadius(const schema::Vec3& n, EllipsoidRadii radii) {
   return effectiveRadius(toVec3(n), radii);
 }
 
+/// The point of triangle abc closest to `p` (any Eigen 3-vector type, float
+/// or double). Works by the region of the triangle's Voronoi diagram `p`
+/// falls in: a corner, an edge, or the face. Precondition: abc has non-zero
+/// area.
+template <typename Vector>
+Vector closestPointOnTriangle(const Vector& p, const Vector& a, const Vector& b, const Vector& c) {
+  using Scalar = typename Vector::Scalar;
+  const Vector ab = b - a, ac = c - a, ap = p - a;
+  const Scalar d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vector bp = p - b;
+  const Scalar d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const Scalar vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+  const Vector cp = p - c;
+  const Scalar d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const Scalar vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+  const Scalar va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  const Scalar denom = Scalar(1) / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
 }  // namespace bspf
