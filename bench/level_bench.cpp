@@ -18,16 +18,20 @@
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: bspf_level_bench LEVEL.bspf [--queries N] [--repeats R] [--travel M]\n");
+    std::fprintf(stderr,
+                 "usage: bspf_level_bench LEVEL.bspf [--queries N] [--repeats R] [--travel M]\n");
     return 2;
   }
   int queries = 20000, repeats = 5;
   float travel = 0.7f;  // metres: one frame at 40 m/s is 0.67 m
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
-    if (flag == "--queries") queries = std::atoi(argv[i + 1]);
-    else if (flag == "--repeats") repeats = std::atoi(argv[i + 1]);
-    else if (flag == "--travel") travel = std::strtof(argv[i + 1], nullptr);
+    if (flag == "--queries")
+      queries = std::atoi(argv[i + 1]);
+    else if (flag == "--repeats")
+      repeats = std::atoi(argv[i + 1]);
+    else if (flag == "--travel")
+      travel = std::strtof(argv[i + 1], nullptr);
   }
   std::vector<double> openMs;
   for (int r = 0; r < std::max(repeats, 5); ++r) {
@@ -83,7 +87,10 @@ int main(int argc, char** argv) {
     nsPerQuery.push_back(std::chrono::duration<double, std::nano>(stop - start).count() / queries);
   }
   std::sort(nsPerQuery.begin(), nsPerQuery.end());
-  std::printf("{\"open_ms_median\":%.3f,\"queries\":%d,\"leaves_mean\":%.2f,\"candidates_mean\":%.2f,\"ns_per_query_median\":%.1f}\n",
-              openMs[openMs.size() / 2], queries, leafSum / queries, candidateSum / queries, nsPerQuery[nsPerQuery.size() / 2]);
+  std::printf(
+      "{\"open_ms_median\":%.3f,\"queries\":%d,\"leaves_mean\":%.2f,\"candidates_mean\":%.2f,\"ns_"
+      "per_query_median\":%.1f}\n",
+      openMs[openMs.size() / 2], queries, leafSum / queries, candidateSum / queries,
+      nsPerQuery[nsPerQuery.size() / 2]);
   return 0;
 }
