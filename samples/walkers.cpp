@@ -2,7 +2,8 @@
 // level, as a demo of the runtime and a benchmark of its movement step.
 //
 //   walkers LEVEL.bspf [--spawns FILE] [--agents N] [--frames F] [--speed M_PER_S]
-//           [--seed K] [--dt S] [--radius-xz R] [--radius-y R] [--trace OUT.csv] [--json]
+//           [--seed K] [--dt S] [--radius-xz R] [--radius-y R] [--method planes|exact]
+//           [--trace OUT.csv] [--json]
 //           [--brushes FILE]
 //
 // Each agent walks in a random direction (a new one every 0.5 to 2 s) at
@@ -22,6 +23,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -82,6 +84,13 @@ int main(int argc, char** argv) {
   app.add_option("--radius-xz", options.radii.xz, "Body radius along x and z, m")
       ->capture_default_str();
   app.add_option("--radius-y", options.radii.y, "Body radius along y, m")->capture_default_str();
+  app.add_option("--method", options.method, "Narrow phase: planes (the article's) or exact")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, bspf::CollisionMethod>{
+              {"planes", bspf::CollisionMethod::Planes},
+              {"exact", bspf::CollisionMethod::ExactSweep}},
+          CLI::ignore_case))
+      ->capture_default_str();
   app.add_option("--trace", tracePath,
                  "Write 'frame,agent,x,y,z' (every centre after every frame) to this CSV");
   app.add_flag("--json", json, "Print one JSON object instead of a summary");
@@ -169,7 +178,8 @@ int main(int argc, char** argv) {
     out << "{\"level\": " << jsonString(levelPath)
         << ", \"placement\": " << (spawnsPath.empty() ? "\"floor\"" : "\"spawns\"")
         << ", \"agents\": " << options.agents << ", \"frames\": " << options.frames
-        << ", \"speed\": " << options.speed << ", \"dt\": " << options.dt
+        << ", \"speed\": " << options.speed << ", \"dt\": " << options.dt << ", \"method\": \""
+        << (options.method == bspf::CollisionMethod::Planes ? "planes" : "exact") << "\""
         << ", \"radius_xz\": " << options.radii.xz << ", \"radius_y\": " << options.radii.y
         << ", \"seed\": " << options.seed << ", \"steps\": " << s.steps
         << ", \"ns_per_step\": " << s.nsPerStep << ", \"refused_moves\": " << s.refusedMoves

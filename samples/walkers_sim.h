@@ -42,6 +42,8 @@ struct Options {
   float speed = 6.0f;       ///< walking speed, m/s
   float dt = 1.0f / 60.0f;  ///< seconds per frame
   EllipsoidRadii radii{0.45f, 0.85f};
+  /// Narrow phase: the article's planes (default) or the exact sweep.
+  CollisionMethod method = CollisionMethod::Planes;
   std::uint64_t seed = 1;
 };
 
@@ -343,6 +345,7 @@ class Simulation {
       Body& body = bodies_[i];
       body.position = starts[i];
       body.radii = options.radii;
+      body.settings.method = options.method;
       body.settings.maxHorizontalSpeed = options.speed;
       agents_[i].rng = Random(streamSeed(options.seed, i + 1));
     }

@@ -8,22 +8,11 @@
 #include <optional>
 #include <tuple>
 
+#include "slide.h"
+
 namespace bspf {
 
 namespace {
-
-struct Contact {
-  Vec3 normal;
-  bool walkable;
-};
-
-struct SlideResult {
-  Vec3 end;
-  int iterations = 0;
-  bool refused = false;
-  int contactCount = 0;
-  std::array<Contact, kMaxReportedContacts> contacts;
-};
 
 struct Hit {
   std::uint32_t triangle;
@@ -122,9 +111,11 @@ bool meetConstraints(const std::array<const Constraint*, N>& set, Vec3& end) {
 // surface of an earlier slide (a crease, or a corner of three), the end goes
 // to where they meet at once instead of bouncing between them, which would
 // use up the iterations and refuse the move.
-SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,
-                              EllipsoidRadii radii, const MovementSettings& settings,
-                              float walkableNormalY, StepScratch& scratch) {
+}  // namespace
+
+SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& desiredEnd,
+                            EllipsoidRadii radii, const MovementSettings& settings,
+                            float walkableNormalY, StepScratch& scratch) {
   SlideResult result;
   result.end = desiredEnd;
   std::array<Constraint, kMaxReportedContacts> constraints;
@@ -169,6 +160,16 @@ SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3&
   }
 }
 
+namespace {
+
+SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,
+                              EllipsoidRadii radii, const MovementSettings& settings,
+                              float walkableNormalY, StepScratch& scratch) {
+  return settings.method == CollisionMethod::ExactSweep
+             ? slideExact(world, start, desiredEnd, radii, settings, walkableNormalY, scratch)
+             : slideWithPlanes(world, start, desiredEnd, radii, settings, walkableNormalY, scratch);
+}
+
 // Removes (slide) or reflects (bounce) the velocity's component into each
 // contact; a walkable contact stops the fall.
 void respondToContacts(Body& body, const SlideResult& slide, float dt) {
@@ -178,13 +179,22 @@ void respondToContacts(Body& body, const SlideResult& slide, float dt) {
   const float restingSpeed = 2.0f * body.settings.gravity * dt;
   for (int i = 0; i < slide.contactCount; ++i) {
     const Contact& c = slide.contacts[i];
-    const float into = body.velocity.dot(c.normal);
+    // A steep surface facing up (a rounded edge met low on the body, a
+    // slope too steep to walk) stops a sliding body like a wall: removing
+    // the velocity along its true normal would turn a fast run into a leap
+    // over the obstacle. Bouncing bodies keep the true normal.
+    Vec3 normal = c.normal;
+    if (!c.walkable && e == 0 && normal.y() > 0) {
+      const Vec3 level(normal.x(), 0, normal.z());
+      if (level.squaredNorm() > 1e-6f) normal = level.normalized();
+    }
+    const float into = body.velocity.dot(normal);
     if (into >= 0) continue;
     const bool bounce = e > 0 && -into > restingSpeed;
     if (c.walkable && !bounce) {
       body.velocity.y() = std::max(body.velocity.y(), 0.0f);
     } else {
-      body.velocity -= (1.0f + (bounce ? e : 0.0f)) * into * c.normal;
+      body.velocity -= (1.0f + (bounce ? e : 0.0f)) * into * normal;
     }
   }
 }

@@ -7,8 +7,8 @@
 
 namespace bspf {
 
-void collectSweptLeaves(const World& world, const Vec3& from, const Vec3& to,
-                        EllipsoidRadii radii, std::vector<std::uint32_t>& leavesOut) {
+void collectSweptLeaves(const World& world, const Vec3& from, const Vec3& to, EllipsoidRadii radii,
+                        std::vector<std::uint32_t>& leavesOut) {
   assert(radii.xz > 0 && radii.y > 0);
   const std::span<const schema::Node> nodes = world.nodes();
   // Near-first depth-first order pushes at most one far child per level.

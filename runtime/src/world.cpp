@@ -202,9 +202,9 @@ OpenResult verifyAndView(std::span<const std::byte> bytes, std::shared_ptr<const
                   "truncated: " + std::to_string(present) + " of " + std::to_string(announced) +
                       " blob bytes present");
   if (present > announced)
-    return refuse(LoadStatus::Malformed, name,
-                  "malformed: " + std::to_string(present - announced) +
-                      " stray bytes after the blob");
+    return refuse(
+        LoadStatus::Malformed, name,
+        "malformed: " + std::to_string(present - announced) + " stray bytes after the blob");
   if (announced >= FLATBUFFERS_MAX_BUFFER_SIZE)
     return refuse(LoadStatus::Malformed, name, "malformed: larger than a blob can be (2 GiB)");
 
@@ -222,8 +222,8 @@ OpenResult verifyAndView(std::span<const std::byte> bytes, std::shared_ptr<const
     const auto version = table->GetField<std::uint32_t>(schema::World::VT_FORMAT_VERSION, 0);
     if (version != kFormatVersion)
       return refuse(LoadStatus::WrongVersion, name,
-                    "format version " + std::to_string(version) +
-                        ", this runtime reads version " + std::to_string(kFormatVersion) +
+                    "format version " + std::to_string(version) + ", this runtime reads version " +
+                        std::to_string(kFormatVersion) +
                         " (recompile the level with a matching bspc)");
   }
   flatbuffers::Verifier verifier(data, bytes.size());

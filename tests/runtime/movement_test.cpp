@@ -34,11 +34,21 @@ bspc::Mesh slope(double degrees) {
   return m;
 }
 
-Body walker(const Vec3& at) {
+Body walker(const Vec3& at, bspf::CollisionMethod method = bspf::CollisionMethod::Planes) {
   Body b;
   b.position = at;
   b.radii = {0.45f, 0.85f};
+  b.settings.method = method;
   return b;
+}
+
+// The behaviour tests run for both narrow phases.
+bspf::CollisionMethod eachMethod() {
+  return GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+}
+
+const char* nameOf(bspf::CollisionMethod m) {
+  return m == bspf::CollisionMethod::Planes ? "planes" : "exact";
 }
 
 void run(const bspf::World& world, Body& body, const Vec3& force, int frames,
@@ -49,9 +59,11 @@ void run(const bspf::World& world, Body& body, const Vec3& force, int frames,
 }  // namespace
 
 TEST_CASE("a body dropped onto a floor lands and stays still", "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
   const Level level(floorSlab());
   bspf::StepScratch scratch;
-  Body body = walker({0, 3, 0});
+  Body body = walker({0, 3, 0}, method);
   bspf::StepReport report;
   run(level.world, body, Vec3::Zero(), 120, scratch, &report);
   REQUIRE(report.grounded);
@@ -66,11 +78,13 @@ TEST_CASE("a body dropped onto a floor lands and stays still", "[runtime][moveme
 
 TEST_CASE("a body hitting a wall at 45 degrees slides along it keeping its tangential velocity",
           "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
   bspc::Mesh mesh = floorSlab();
   bspf::test::append(mesh, bspf::test::boxMesh({5, 0, -20}, {6, 4, 20}));  // wall face at x = 5
   const Level level(mesh);
   bspf::StepScratch scratch;
-  Body body = walker({0, 0.851f, 0});
+  Body body = walker({0, 0.851f, 0}, method);
   body.settings.groundFriction = 0;
   body.settings.maxHorizontalSpeed = 100;
   body.velocity = Vec3(4, 0, 4);  // 45 degrees into the wall
@@ -91,12 +105,14 @@ TEST_CASE("a body hitting a wall at 45 degrees slides along it keeping its tange
 }
 
 TEST_CASE("a body at 100 m/s never ends inside or beyond a 1 cm wall", "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
   bspc::Mesh mesh = floorSlab();
   bspf::test::append(mesh, bspf::test::boxMesh({5, 0, -10}, {5.01, 4, 10}));
   const Level level(mesh);
   bspf::StepScratch scratch;
   for (int trial = 0; trial < 50; ++trial) {
-    Body body = walker({0, 0.851f + 0.02f * trial, -4.0f + 0.16f * trial});
+    Body body = walker({0, 0.851f + 0.02f * trial, -4.0f + 0.16f * trial}, method);
     body.settings.maxHorizontalSpeed = 100;
     body.velocity = Vec3(100, 0, 0.3f * (trial % 5));
     for (int f = 0; f < 30; ++f) {
@@ -109,10 +125,12 @@ TEST_CASE("a body at 100 m/s never ends inside or beyond a 1 cm wall", "[runtime
 
 TEST_CASE("a body stands still on a 30 degree slope and slides down a 60 degree one",
           "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
   bspf::StepScratch scratch;
   {
     const Level level(slope(30));
-    Body body = walker({0, 6, 5});
+    Body body = walker({0, 6, 5}, method);
     run(level.world, body, Vec3::Zero(), 120, scratch);
     const Vec3 rest = body.position;
     bspf::StepReport report;
@@ -122,7 +140,7 @@ TEST_CASE("a body stands still on a 30 degree slope and slides down a 60 degree 
   }
   {
     const Level level(slope(60));
-    Body body = walker({0, 12, 5});
+    Body body = walker({0, 12, 5}, method);
     run(level.world, body, Vec3::Zero(), 60, scratch);
     const Vec3 before = body.position;
     bspf::StepReport report;
@@ -135,11 +153,13 @@ TEST_CASE("a body stands still on a 30 degree slope and slides down a 60 degree 
 }
 
 TEST_CASE("a body walks up a ramp", "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
   bspc::Mesh mesh = floorSlab();
   bspf::test::append(mesh, slope(20));
   const Level level(mesh);
   bspf::StepScratch scratch;
-  Body body = walker({0, 0.9f, -3});
+  Body body = walker({0, 0.9f, -3}, method);
   run(level.world, body, Vec3::Zero(), 30, scratch);
   run(level.world, body, Vec3(0, 0, 60), 120, scratch);  // walk towards +z, up the ramp
   // Two seconds at 6 m/s: well up the 20 degree ramp.
@@ -148,12 +168,14 @@ TEST_CASE("a body walks up a ramp", "[runtime][movement]") {
 }
 
 TEST_CASE("a body pushed into a 90 degree corner settles", "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
   bspc::Mesh mesh = floorSlab();
   bspf::test::append(mesh, bspf::test::boxMesh({5, 0, -20}, {6, 4, 20}));
   bspf::test::append(mesh, bspf::test::boxMesh({-20, 0, 5}, {6, 4, 6}));
   const Level level(mesh);
   bspf::StepScratch scratch;
-  Body body = walker({0, 0.9f, 0});
+  Body body = walker({0, 0.9f, 0}, method);
   const Vec3 push(40, 0, 40);
   run(level.world, body, push, 180, scratch);
   bspf::StepReport report;
@@ -168,11 +190,13 @@ TEST_CASE("a body pushed into a 90 degree corner settles", "[runtime][movement]"
 }
 
 TEST_CASE("two bodies pushed together end apart and neither inside a wall", "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
   bspc::Mesh mesh = floorSlab();
   bspf::test::append(mesh, bspf::test::boxMesh({5, 0, -20}, {6, 4, 20}));
   const Level level(mesh);
   bspf::StepScratch scratch;
-  std::vector<Body> bodies{walker({3, 0.9f, 0}), walker({4, 0.9f, 0.1f})};
+  std::vector<Body> bodies{walker({3, 0.9f, 0}, method), walker({4, 0.9f, 0.1f}, method)};
   const std::vector<Vec3> forces{Vec3(60, 0, 0), Vec3(60, 0, 0)};  // both into the wall
   for (int f = 0; f < 240; ++f) bspf::stepBodies(level.world, bodies, forces, kDt, scratch);
   for (const Body& b : bodies) REQUIRE(b.position.x() <= 5 - 0.45f + 1e-3f);
@@ -185,11 +209,14 @@ TEST_CASE("two bodies pushed together end apart and neither inside a wall", "[ru
 
 TEST_CASE("a ball with restitution 0.5 rebounds to a quarter of its drop height",
           "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
   const Level level(floorSlab());
   bspf::StepScratch scratch;
   Body ball;
   ball.radii = {0.25f, 0.25f};
   ball.settings.restitution = 0.5f;
+  ball.settings.method = method;
   const float dropHeight = 4.0f;  // of the ball's bottom above the floor
   ball.position = Vec3(0, 0.25f + dropHeight, 0);
   float peakAfterBounce = 0;
@@ -241,12 +268,14 @@ TEST_CASE("a fast oblique body cannot pass a small panel", "[runtime][movement]"
 }
 
 TEST_CASE("friction stops a sliding body without reversing it", "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
   // The article subtracts the friction coefficient from the acceleration
   // vector, a scalar from a vector; here friction decelerates the horizontal
   // speed and stops at zero.
   const Level level(floorSlab());
   bspf::StepScratch scratch;
-  Body body = walker({0, 0.851f, 0});
+  Body body = walker({0, 0.851f, 0}, method);
   run(level.world, body, Vec3::Zero(), 10, scratch);
   REQUIRE(body.grounded);
   const Vec3 initial(3, 0, -4);  // 5 m/s
@@ -266,6 +295,8 @@ TEST_CASE("friction stops a sliding body without reversing it", "[runtime][movem
 
 TEST_CASE("the same inputs give the same trajectory, and a step leaves the world unchanged",
           "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
   // The article's perpendicular-plane loop writes the offset into the stored
   // plane distance, so testing a triangle changes it for the next test. The
   // World here is read-only; repeating a scene must repeat it bit for bit.
@@ -282,7 +313,7 @@ TEST_CASE("the same inputs give the same trajectory, and a step leaves the world
     std::vector<Body> bodies;
     std::vector<Vec3> forces;
     for (int i = 0; i < 12; ++i) {
-      bodies.push_back(walker({-3.0f + 0.7f * i, 1.0f + 0.1f * i, -2.0f + 0.3f * i}));
+      bodies.push_back(walker({-3.0f + 0.7f * i, 1.0f + 0.1f * i, -2.0f + 0.3f * i}, method));
       forces.emplace_back(std::cos(float(i)) * 60, 0, std::sin(float(i)) * 60);
     }
     std::vector<Vec3> trace;

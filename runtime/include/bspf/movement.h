@@ -37,8 +37,25 @@
 
 namespace bspf {
 
+/// How a body collides with the level's triangles. Both use the same leaf
+/// traversal and report the same diagnostics.
+enum class CollisionMethod {
+  /// The article's: side-value pre-check, six perpendicular planes offset by
+  /// the body's extent, slide by moving the end out along the normal. Fast;
+  /// over-approximates a triangle's edges and corners (ghost contacts).
+  Planes,
+  /// Exact continuous collision: in the space where the ellipsoid is the unit
+  /// sphere, the earliest time of impact against each candidate's face, edges
+  /// and corners; the body advances to the contact, keeps `skin` along the
+  /// contact normal, and slides the rest of the move along the tangent plane.
+  /// A body that starts in penetration is first pushed out.
+  ExactSweep,
+};
+
 /// How a body moves. The defaults suit a walking character of about 1.7 m.
 struct MovementSettings {
+  /// Narrow phase against the level. Default: the article's method.
+  CollisionMethod method = CollisionMethod::Planes;
   /// Gravity, m/s^2, along -Y. >= 0. Default 9.81.
   float gravity = 9.81f;
   /// Horizontal deceleration from friction while grounded, m/s^2. It brings
@@ -83,8 +100,9 @@ inline constexpr int kMaxReportedContacts = 8;
 struct StepReport {
   /// Slides against the level (0 when nothing was in the way).
   int iterations = 0;
-  /// The move was still blocked after maxIterations slides: the body stayed
-  /// at its start position (its velocity is kept, less gravity's gain).
+  /// The move was still blocked after maxIterations slides. Planes: the body
+  /// stayed at its start. ExactSweep: it stopped at its last contact point
+  /// (already a safe position).
   bool refused = false;
   /// A walkable contact this step.
   bool grounded = false;

@@ -28,8 +28,8 @@ inline constexpr float kSweepMarginMetres = 1e-4f;
 /// missed; a few it does not overlap may be listed. Cost: O(visited nodes), no
 /// allocation beyond growing `leavesOut`.
 /// Preconditions: finite points, radii > 0.
-void collectSweptLeaves(const World& world, const Vec3& from, const Vec3& to,
-                        EllipsoidRadii radii, std::vector<std::uint32_t>& leavesOut);
+void collectSweptLeaves(const World& world, const Vec3& from, const Vec3& to, EllipsoidRadii radii,
+                        std::vector<std::uint32_t>& leavesOut);
 
 /// The leaf whose cell contains point `p` (metres). A point exactly on a split
 /// plane counts as in front of it. Cost: O(tree depth).

@@ -129,9 +129,9 @@ struct TreeStats {
   std::uint32_t depthMax = 0;
   double depthMean = 0;  // over leaves
   std::uint32_t trianglesPerLeafMax = 0;
-  double trianglesPerLeafMean = 0;       // over leaves
-  double referencesPerTriangle = 0;      // leaf list entries / triangles
-  double bytesPerTriangle = 0;           // whole blob / triangles
+  double trianglesPerLeafMean = 0;   // over leaves
+  double referencesPerTriangle = 0;  // leaf list entries / triangles
+  double bytesPerTriangle = 0;       // whole blob / triangles
 };
 
 /// Walks the tree once. Precondition: `world` was opened by this runtime.

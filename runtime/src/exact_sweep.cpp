@@ -1,0 +1,211 @@
+// CollisionMethod::ExactSweep: exact continuous collision of a swept
+// ellipsoid against triangles. Everything happens in "sphere space", the
+// level scaled by (1/rxz, 1/ry, 1/rxz), where the body is the unit sphere and
+// its path a segment; the earliest time of impact of a unit sphere against a
+// triangle is the earliest of its face, its three edges and its three
+// corners. Triangles are one-sided, as in the planes method: a centre behind
+// a triangle's plane ignores it.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "slide.h"
+
+namespace bspf {
+
+namespace {
+
+struct Impact {
+  float time = std::numeric_limits<float>::infinity();  ///< fraction of the move, [0, 1]
+  Vec3 normal = Vec3::Zero();  ///< unit, sphere space: from the contact point to the centre
+};
+
+// Smallest root in [0, 1] of a t^2 + b t + c = 0 with c >= 0 (outside at
+// t = 0) and the distance shrinking; none when the path misses.
+bool earliestRoot(double a, double b, double c, double& t) {
+  if (a <= 1e-18 || b >= 0) return false;  // not approaching
+  const double discriminant = b * b - 4 * a * c;
+  if (discriminant < 0) return false;
+  const double root = (-b - std::sqrt(discriminant)) / (2 * a);
+  if (root < 0 || root > 1) return false;
+  t = root;
+  return true;
+}
+
+struct Triangle {
+  Vec3 a, b, c, normal;  // sphere space; normal unit, by the winding
+};
+
+// The earliest impact of the unit sphere moving from p along v (t in [0, 1])
+// with triangle `tri`, if it comes before `best`. In double precision, and
+// relative to the start point: a body resting on an edge far from the
+// triangle's corners loses the contact to cancellation in float.
+void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best) {
+  using V = Eigen::Vector3d;
+  const V p = pf.cast<double>(), v = vf.cast<double>(), n = tri.normal.cast<double>();
+  const V corners[3] = {tri.a.cast<double>() - p, tri.b.cast<double>() - p,
+                        tri.c.cast<double>() - p};  // relative to the start
+  const double startSide = -n.dot(corners[0]);
+  if (startSide < 0) return;  // behind: one-sided
+  // Face: the sphere first touches the plane at distance 1; if that point of
+  // the plane is inside the triangle it is the first touch of the triangle.
+  const double approach = n.dot(v);
+  if (approach < 0 && startSide >= 1) {
+    const double t = (startSide - 1) / -approach;
+    if (t <= 1 && t < best.time) {
+      const V touch = t * v - n;
+      bool inside = true;
+      for (int k = 0; k < 3 && inside; ++k)
+        inside = n.dot((corners[(k + 1) % 3] - corners[k]).cross(touch - corners[k])) >= 0;
+      if (inside) {
+        best = {float(t), tri.normal};
+        return;
+      }
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    // Edge k: the infinite cylinder of radius 1 around it, then the segment.
+    const V& e0 = corners[k];
+    const V d = corners[(k + 1) % 3] - e0;
+    const double dd = d.squaredNorm();
+    const V w = -e0 - (-e0).dot(d) / dd * d;  // start, perpendicular to the edge
+    const V vPerp = v - v.dot(d) / dd * d;
+    double t;
+    if (earliestRoot(vPerp.squaredNorm(), 2 * vPerp.dot(w), w.squaredNorm() - 1, t) &&
+        t < best.time) {
+      const V centre = t * v;
+      const double along = (centre - e0).dot(d) / dd;
+      if (along >= 0 && along <= 1)
+        best = {float(t), (centre - (e0 + along * d)).normalized().cast<float>()};
+    }
+    // Corner k.
+    if (earliestRoot(v.squaredNorm(), -2 * v.dot(e0), e0.squaredNorm() - 1, t) && t < best.time)
+      best = {float(t), (t * v - e0).normalized().cast<float>()};
+  }
+}
+
+Triangle sphereSpaceTriangle(const World& world, std::uint32_t t, const Vec3& toSphere) {
+  const schema::Triangle& tri = world.triangles()[t];
+  Triangle out;
+  out.a = toVec3(world.vertices()[tri.v0()]).cwiseProduct(toSphere);
+  out.b = toVec3(world.vertices()[tri.v1()]).cwiseProduct(toSphere);
+  out.c = toVec3(world.vertices()[tri.v2()]).cwiseProduct(toSphere);
+  out.normal = (out.b - out.a).cross(out.c - out.a).normalized();
+  return out;
+}
+
+// The world-space unit normal of a sphere-space normal: normals scale by the
+// inverse of the position scale, so by (1/rxz, 1/ry, 1/rxz) again.
+Vec3 worldNormal(const Vec3& sphereNormal, const Vec3& toSphere) {
+  return sphereNormal.cwiseProduct(toSphere).normalized();
+}
+
+void addContact(SlideResult& result, const Vec3& normal, float walkableNormalY) {
+  if (result.contactCount < kMaxReportedContacts)
+    result.contacts[result.contactCount++] = {normal, normal.y() >= walkableNormalY};
+}
+
+// Pushes a centre that starts within the unit distance of a triangle (in
+// front of it: penetration) out along the closest-point direction, to
+// 1 + padding. A few
+// rounds settle a body wedged between several triangles.
+void recoverFromPenetration(const World& world, Vec3& p, const Vec3& toSphere, float padding,
+                            float walkableNormalY, EllipsoidRadii radii, StepScratch& scratch,
+                            SlideResult& result) {
+  for (int round = 0; round < 4; ++round) {
+    const Vec3 centre = p.cwiseQuotient(toSphere);
+    collectCandidateTriangles(world, centre, centre, radii, scratch.sweep, scratch.candidates);
+    float deepest = 0;
+    Vec3 push = Vec3::Zero();
+    for (const std::uint32_t t : scratch.candidates) {
+      const Triangle tri = sphereSpaceTriangle(world, t, toSphere);
+      if (tri.normal.dot(p - tri.a) < 0) continue;
+      const Vec3 closest = closestPointOnTriangle<Vec3>(p, tri.a, tri.b, tri.c);
+      const Vec3 offset = p - closest;
+      const float distance = offset.norm();
+      if (distance >= 1) continue;  // within the padding is not penetration
+      const float depth = 1 + padding - distance;
+      if (depth <= deepest) continue;
+      deepest = depth;
+      push = (distance > 1e-6f ? Vec3(offset / distance) : tri.normal) * depth;
+    }
+    if (deepest <= 0) return;
+    p += push;
+    addContact(result, worldNormal(push.normalized(), toSphere), walkableNormalY);
+  }
+}
+
+}  // namespace
+
+SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desiredEnd,
+                       EllipsoidRadii radii, const MovementSettings& settings,
+                       float walkableNormalY, StepScratch& scratch) {
+  SlideResult result;
+  const Vec3 toSphere(1 / radii.xz, 1 / radii.y, 1 / radii.xz);
+  // The skin in sphere units, so the world gap is at least `skin`.
+  const float padding = settings.skin / std::max(radii.xz, radii.y);
+  Vec3 p = start.cwiseProduct(toSphere);
+  Vec3 move = (desiredEnd - start).cwiseProduct(toSphere);
+  recoverFromPenetration(world, p, toSphere, padding, walkableNormalY, radii, scratch, result);
+
+  std::array<Vec3, 3> planes;  // sphere-space normals slid along this step
+  int planeCount = 0;
+  for (int iteration = 0;; ++iteration) {
+    if (move.squaredNorm() < 1e-14f) break;
+    const Vec3 from = p.cwiseQuotient(toSphere);
+    collectCandidateTriangles(world, from, (p + move).cwiseQuotient(toSphere), radii, scratch.sweep,
+                              scratch.candidates);
+    Impact impact;
+    for (const std::uint32_t t : scratch.candidates)
+      earliestImpact(sphereSpaceTriangle(world, t, toSphere), p, move, impact);
+    if (impact.time > 1) {
+      p += move;
+      break;
+    }
+    if (iteration == settings.maxIterations) {
+      result.refused = true;
+      break;  // p is the last contact point: a safe position
+    }
+    // Advance to the contact, then step back out to the padding along the
+    // contact normal (stepping back along the velocity, as the well-known
+    // write-ups do, leaves a grazing body inside the padding).
+    p += impact.time * move;
+    const Vec3 normal = worldNormal(impact.normal, toSphere);
+    const bool walkable = normal.y() >= walkableNormalY;
+    // On walkable ground the gap is made straight up: along a slope's normal
+    // it would step the body downhill a little every frame.
+    const float gap = impact.normal.dot(move) < 0 ? padding : 0;
+    p += walkable ? Vec3(0, gap / impact.normal.y(), 0) : Vec3(impact.normal * gap);
+    Vec3 rest = (1 - impact.time) * move;
+    if (walkable) {
+      // On walkable ground keep the horizontal move and follow the slope:
+      // the fall is cancelled, so gravity does not creep a body downhill.
+      Vec3 world = rest.cwiseQuotient(toSphere);
+      world.y() = -(normal.x() * world.x() + normal.z() * world.z()) / normal.y();
+      rest = world.cwiseProduct(toSphere);
+    } else {
+      rest -= rest.dot(impact.normal) * impact.normal;
+    }
+    // In a crease the slide along this surface may lead back into an earlier
+    // one: follow the crease line instead; in a corner of three, stop.
+    for (int i = 0; i < planeCount; ++i) {
+      if (rest.dot(planes[i]) >= 0 || planes[i].dot(impact.normal) > 0.9999f) continue;
+      const Vec3 crease = planes[i].cross(impact.normal);
+      const float length = crease.norm();
+      if (length < 1e-4f || planeCount >= 2) {
+        rest.setZero();
+        break;
+      }
+      const Vec3 along = crease / length;
+      rest = rest.dot(along) * along;
+    }
+    if (planeCount < int(planes.size())) planes[planeCount++] = impact.normal;
+    move = rest;
+    ++result.iterations;
+    addContact(result, normal, walkableNormalY);
+  }
+  result.end = p.cwiseQuotient(toSphere);
+  return result;
+}
+
+}  // namespace bspf

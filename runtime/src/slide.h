@@ -1,0 +1,35 @@
+// The narrow phases of the movement step: each moves a body's centre from
+// `start` towards `desiredEnd` against the level's triangles, sliding along
+// what it meets. Private to the runtime.
+#pragma once
+
+#include <bspf/movement.h>
+
+#include <array>
+
+namespace bspf {
+
+struct Contact {
+  Vec3 normal;  ///< unit, world space, pointing out of the surface
+  bool walkable;
+};
+
+struct SlideResult {
+  Vec3 end;
+  int iterations = 0;
+  bool refused = false;
+  int contactCount = 0;
+  std::array<Contact, kMaxReportedContacts> contacts;
+};
+
+/// The article's method (CollisionMethod::Planes), defects fixed.
+SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& desiredEnd,
+                            EllipsoidRadii radii, const MovementSettings& settings,
+                            float walkableNormalY, StepScratch& scratch);
+
+/// Exact continuous collision in unit-sphere space (CollisionMethod::ExactSweep).
+SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desiredEnd,
+                       EllipsoidRadii radii, const MovementSettings& settings,
+                       float walkableNormalY, StepScratch& scratch);
+
+}  // namespace bspf
