@@ -312,8 +312,12 @@ TEST_CASE("walkers at 6 and 40 m/s never end inside a solid, on the arena and sh
           "[samples][walkers]") {
   const std::filesystem::path outDir = bspf::test::freshTempDir("walkers-levels");
   const std::vector<Level> levels = allLevels(outDir);
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO((method == bspf::CollisionMethod::Planes ? "planes" : "exact") << " method");
   for (const Level& level : levels) {
     bspf::walkers::Options options;
+    options.method = method;
     // Starts from the level's spawn points, and from random open floor.
     const std::vector<Vec3> fromSpawns =
         bspf::walkers::startsFromSpawns(level.spawns, options.agents);
