@@ -40,13 +40,20 @@ struct Triangle {
 // with triangle `tri`, if it comes before `best`. In double precision, and
 // relative to the start point: a body resting on an edge far from the
 // triangle's corners loses the contact to cancellation in float.
-void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best) {
+// Sets `penetrating` when the start is already within the unit distance of
+// the triangle (in front of it).
+void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best,
+                    bool& penetrating) {
   using V = Eigen::Vector3d;
   const V p = pf.cast<double>(), v = vf.cast<double>(), n = tri.normal.cast<double>();
   const V corners[3] = {tri.a.cast<double>() - p, tri.b.cast<double>() - p,
                         tri.c.cast<double>() - p};  // relative to the start
   const double startSide = -n.dot(corners[0]);
   if (startSide < 0) return;  // behind: one-sided
+  if (startSide < 1 && !penetrating)
+    penetrating =
+        closestPointOnTriangle<V>(V::Zero(), corners[0], corners[1], corners[2]).squaredNorm() <
+        1.0;
   // Face: the sphere first touches the plane at distance 1; if that point of
   // the plane is inside the triangle it is the first touch of the triangle.
   const double approach = n.dot(v);
@@ -146,18 +153,36 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
   const float padding = settings.skin / std::max(radii.xz, radii.y);
   Vec3 p = start.cwiseProduct(toSphere);
   Vec3 move = (desiredEnd - start).cwiseProduct(toSphere);
-  recoverFromPenetration(world, p, toSphere, padding, walkableNormalY, radii, scratch, result);
 
   std::array<Vec3, 3> planes;  // sphere-space normals slid along this step
   int planeCount = 0;
+  bool recovered = false;
   for (int iteration = 0;; ++iteration) {
     if (move.squaredNorm() < 1e-14f) break;
     const Vec3 from = p.cwiseQuotient(toSphere);
     collectCandidateTriangles(world, from, (p + move).cwiseQuotient(toSphere), radii, scratch.sweep,
                               scratch.candidates);
     Impact impact;
-    for (const std::uint32_t t : scratch.candidates)
-      earliestImpact(sphereSpaceTriangle(world, t, toSphere), p, move, impact);
+    bool penetrating = false;
+    const Vec3 to = (p + move).cwiseQuotient(toSphere);
+    for (const std::uint32_t t : scratch.candidates) {
+      // The side-value pre-check on the stored face plane: a path that stays
+      // more than the body's extent in front of the plane, or starts behind
+      // it, cannot touch the triangle.
+      const schema::Plane& face = world.trianglePlanes()[t].face();
+      const float reach = effectiveRadius(face.normal(), radii) * 1.0001f + 1e-5f;
+      const float startSide = signedDistance(face, from);
+      if (startSide < -1e-5f || std::min(startSide, signedDistance(face, to)) > reach) continue;
+      earliestImpact(sphereSpaceTriangle(world, t, toSphere), p, move, impact, penetrating);
+    }
+    // A start in penetration (pushed there by another body, or placed there)
+    // is first moved out, then the sweep is made again from there.
+    if (penetrating && iteration == 0 && !recovered) {
+      recovered = true;
+      recoverFromPenetration(world, p, toSphere, padding, walkableNormalY, radii, scratch, result);
+      --iteration;
+      continue;
+    }
     if (impact.time > 1) {
       p += move;
       break;
