@@ -30,6 +30,7 @@
 #include <string>
 #include <system_error>
 
+#include "oracle.h"
 #include "walkers_sim.h"
 
 namespace {
@@ -94,6 +95,11 @@ int main(int argc, char** argv) {
   app.add_option("--trace", tracePath,
                  "Write 'frame,agent,x,y,z' (every centre after every frame) to this CSV");
   app.add_flag("--json", json, "Print one JSON object instead of a summary");
+  bool accuracy = false;
+  app.add_flag("--accuracy", accuracy,
+               "Also measure, untimed, each agent's penetration into the level after every frame "
+               "(exact, in sphere space) and each step's deviation between the two narrow phases "
+               "from the same state");
   app.add_option("--brushes", brushesPath,
                  "The level's solids as planes (a .brushes.txt file); counts agents whose centre "
                  "is inside one, after every frame");
@@ -142,9 +148,25 @@ int main(int argc, char** argv) {
 
   bspf::walkers::Simulation sim(world, starts.points, options);
   long long insideSolid = 0;  // agent-frames with the centre inside a solid
+  std::vector<double> penetrations, deviations;
+  bspf::StepScratch oracleScratch;
+  std::vector<std::uint32_t> oracleCandidates;
+  const auto measureDeviation = [&](std::span<const bspf::Body> bodies,
+                                    std::span<const bspf::Vec3> forces) {
+    for (std::size_t i = 0; i < bodies.size(); ++i)
+      deviations.push_back(
+          bspf::oracle::stepDeviation(world, bodies[i], forces[i], options.dt, oracleScratch));
+  };
   for (int frame = 0; frame < options.frames; ++frame) {
-    sim.step();  // times stepBodies only
+    if (accuracy)
+      sim.step(measureDeviation);  // times stepBodies only
+    else
+      sim.step();
     if (brushes) insideSolid += bspf::walkers::countInsideSolid(*brushes, sim.bodies());
+    if (accuracy)
+      for (const bspf::Body& b : sim.bodies())
+        penetrations.push_back(bspf::oracle::penetration(world, b.position, b.radii,
+                                                         oracleScratch.sweep, oracleCandidates));
     if (trace.is_open()) {
       const auto bodies = sim.bodies();
       for (std::size_t i = 0; i < bodies.size(); ++i) {
@@ -172,6 +194,20 @@ int main(int argc, char** argv) {
   int fellOut = 0;
   for (const bspf::Body& b : sim.bodies()) fellOut += b.position.y() < floorY;
 
+  // Accuracy figures: penetration as a fraction of the body's size, deviation
+  // in metres; null without --accuracy.
+  auto figure = [&](std::vector<double>& values, double p) {
+    if (!accuracy) return std::string("null");
+    std::ostringstream text;
+    text.precision(6);
+    text << bspf::oracle::quantile(values, p);
+    return text.str();
+  };
+  const std::string penetrationP99 = figure(penetrations, 0.99),
+                    penetrationMax = figure(penetrations, 1.0),
+                    deviationP50 = figure(deviations, 0.5), deviationP99 = figure(deviations, 0.99),
+                    deviationMax = figure(deviations, 1.0);
+
   if (json) {
     std::ostringstream out;
     out.precision(6);
@@ -187,7 +223,11 @@ int main(int argc, char** argv) {
         << ", \"iterations_max\": " << s.iterationsMax
         << ", \"grounded_fraction\": " << s.groundedFraction
         << ", \"body_contacts_mean\": " << s.bodyContactsMean << ", \"fell_out\": " << fellOut
-        << ", \"inside_solid\": " << (brushes ? std::to_string(insideSolid) : "null") << "}\n";
+        << ", \"inside_solid\": " << (brushes ? std::to_string(insideSolid) : "null")
+        << ", \"penetration_p99\": " << penetrationP99
+        << ", \"penetration_max\": " << penetrationMax << ", \"deviation_p50\": " << deviationP50
+        << ", \"deviation_p99\": " << deviationP99 << ", \"deviation_max\": " << deviationMax
+        << "}\n";
     std::cout << out.str();
   } else {
     std::printf("walkers: %s: %d agents x %d frames at %g m/s (dt %g s, placement %s)\n",
@@ -200,6 +240,12 @@ int main(int argc, char** argv) {
                 fellOut);
     if (brushes)
       std::printf("  inside a solid of %s: %lld agent-frames\n", brushesPath.c_str(), insideSolid);
+    if (accuracy)
+      std::printf(
+          "  penetration p99 %s, max %s (of the body's size); planes-exact deviation per step "
+          "p50 %s, p99 %s, max %s m\n",
+          penetrationP99.c_str(), penetrationMax.c_str(), deviationP50.c_str(),
+          deviationP99.c_str(), deviationMax.c_str());
     if (!tracePath.empty()) std::printf("  trace: %s\n", tracePath.c_str());
   }
   return 0;

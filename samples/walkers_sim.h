@@ -24,6 +24,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <numbers>
 #include <span>
@@ -353,7 +354,10 @@ class Simulation {
 
   /// Advances every agent by one frame: turns the agents whose walk is up,
   /// then one stepBodies call, the only part timed.
-  void step() {
+  /// `beforeStep`, when given, sees the bodies and their forces just before
+  /// the timed stepBodies call (for measurements from the same state).
+  void step(
+      const std::function<void(std::span<const Body>, std::span<const Vec3>)>& beforeStep = {}) {
     const float push = 10 * options_.speed;  // reaches the speed within 0.1 s
     for (std::size_t i = 0; i < agents_.size(); ++i) {
       Agent& agent = agents_[i];
@@ -365,6 +369,7 @@ class Simulation {
       agent.turnIn -= options_.dt;
       forces_[i] = agent.direction * push;
     }
+    if (beforeStep) beforeStep(bodies_, forces_);
     const auto start = std::chrono::steady_clock::now();
     stepBodies(*world_, bodies_, forces_, options_.dt, scratch_, reports_);
     const auto stop = std::chrono::steady_clock::now();

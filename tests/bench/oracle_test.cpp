@@ -1,6 +1,6 @@
 // The accuracy oracle (bench/support/oracle.h) against known answers, and
 // what it says of the two narrow phases.
-#include "support/oracle.h"
+#include "oracle.h"
 
 #include <catch2/catch.hpp>
 #include <random>

@@ -428,3 +428,34 @@ TEST_CASE("walkers --brushes counts the agent-frames inside a solid", "[samples]
     }
   }
 }
+
+TEST_CASE("walkers --accuracy reports penetration and the deviation between narrow phases",
+          "[samples][walkers]") {
+  const std::filesystem::path dir = bspf::test::freshTempDir("walkers-accuracy");
+  const std::filesystem::path samples = bspf::test::samplesDir();
+  bspc::compileFile(samples / "arena.obj", dir / "arena.bspf", {});
+  const std::string common = quoted(dir / "arena.bspf") + " --spawns " +
+                             quoted(samples / "arena.spawns.txt") +
+                             " --agents 16 --frames 120 --speed 40 --json";
+  const auto plain = runWalkers(common);
+  INFO(plain.err << plain.out);
+  REQUIRE(plain.status == 0);
+  for (const char* key :
+       {"penetration_p99", "penetration_max", "deviation_p50", "deviation_p99", "deviation_max"})
+    REQUIRE(jsonValue(plain.out, key) == "null");
+
+  const auto measured = runWalkers(common + " --accuracy");
+  INFO(measured.err << measured.out);
+  REQUIRE(measured.status == 0);
+  // The measurement is untimed and changes nothing: same run.
+  REQUIRE(jsonValue(measured.out, "refused_moves") == jsonValue(plain.out, "refused_moves"));
+  // Bodies keep their skin: no penetration beyond float noise.
+  REQUIRE(std::stod(jsonValue(measured.out, "penetration_max")) < 1e-4);
+  // The two narrow phases agree on most steps (the skin apart), and differ
+  // where the planes method meets ghost contacts or refuses a move.
+  const double p50 = std::stod(jsonValue(measured.out, "deviation_p50"));
+  const double max = std::stod(jsonValue(measured.out, "deviation_max"));
+  REQUIRE(p50 < 0.01);
+  REQUIRE(max > p50);
+  REQUIRE(max <= 40.0 / 60.0 + 0.05);  // never more than one frame's travel
+}

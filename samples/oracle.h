@@ -1,8 +1,9 @@
 // The accuracy oracle: exact answers to "how wrong is this position?", for
-// the tests and the benchmarks. Slow and simple on purpose (double
+// walkers, the tests and the benchmarks. Slow and simple on purpose (double
 // precision, no approximations); never used by the runtime itself.
 #pragma once
 
+#include <bspf/movement.h>
 #include <bspf/query.h>
 
 #include <Eigen/Core>
@@ -56,6 +57,19 @@ inline bool insideClosedMesh(const World& world, const Vec3& point) {
     solidAngle += 2 * std::atan2(numerator, denominator);
   }
   return solidAngle / (4 * M_PI) >= 0.5;
+}
+
+/// How far apart the two narrow phases end one step of `body` from the same
+/// state (metres): the planes method's end against the exact sweep's, each
+/// moving a copy with the same force and dt against the level alone.
+inline double stepDeviation(const World& world, const Body& body, const Vec3& force, float dt,
+                            StepScratch& scratch) {
+  Body planes = body, exact = body;
+  planes.settings.method = CollisionMethod::Planes;
+  exact.settings.method = CollisionMethod::ExactSweep;
+  stepBody(world, planes, force, dt, scratch);
+  stepBody(world, exact, force, dt, scratch);
+  return (planes.position - exact.position).cast<double>().norm();
 }
 
 /// The p-th quantile (0..1) of `values` (sorted in place); 0 when empty.
