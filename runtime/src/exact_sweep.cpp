@@ -50,10 +50,18 @@ void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact&
                         tri.c.cast<double>() - p};  // relative to the start
   const double startSide = -n.dot(corners[0]);
   if (startSide < 0) return;  // behind: one-sided
-  if (startSide < 1 && !penetrating)
-    penetrating =
-        closestPointOnTriangle<V>(V::Zero(), corners[0], corners[1], corners[2]).squaredNorm() <
-        1.0;
+  if (startSide < 1) {
+    // Already within reach (recovery could not clear it all): never let the
+    // move go deeper. Moving towards the closest point is an impact now.
+    const V closest = closestPointOnTriangle<V>(V::Zero(), corners[0], corners[1], corners[2]);
+    const double distance = closest.norm();
+    if (distance < 1) {
+      penetrating = true;
+      const V away = distance > 1e-9 ? V(-closest / distance) : n;
+      if (away.dot(v) < 0 && 0 < best.time) best = {0.0f, away.cast<float>()};
+      return;
+    }
+  }
   // Face: the sphere first touches the plane at distance 1; if that point of
   // the plane is inside the triangle it is the first touch of the triangle.
   const double approach = n.dot(v);
@@ -112,33 +120,31 @@ void addContact(SlideResult& result, const Vec3& normal, float walkableNormalY) 
     result.contacts[result.contactCount++] = {normal, normal.y() >= walkableNormalY};
 }
 
-// Pushes a centre that starts within the unit distance of a triangle (in
-// front of it: penetration) out along the closest-point direction, to
-// 1 + padding. A few
-// rounds settle a body wedged between several triangles.
+// Pushes a centre that starts within the unit distance of triangles (in
+// front of them: penetration) out along each closest-point direction, to
+// 1 + padding, in up to 8 rounds.
 void recoverFromPenetration(const World& world, Vec3& p, const Vec3& toSphere, float padding,
                             float walkableNormalY, EllipsoidRadii radii, StepScratch& scratch,
                             SlideResult& result) {
-  for (int round = 0; round < 4; ++round) {
+  // Gauss-Seidel: each round pushes out of every penetrated triangle in
+  // turn, so a body wedged in a crease leaves it along the bisector instead
+  // of bouncing between the two sides.
+  for (int round = 0; round < 8; ++round) {
     const Vec3 centre = p.cwiseQuotient(toSphere);
     collectCandidateTriangles(world, centre, centre, radii, scratch.sweep, scratch.candidates);
-    float deepest = 0;
-    Vec3 push = Vec3::Zero();
+    bool pushed = false;
     for (const std::uint32_t t : scratch.candidates) {
       const Triangle tri = sphereSpaceTriangle(world, t, toSphere);
       if (tri.normal.dot(p - tri.a) < 0) continue;
-      const Vec3 closest = closestPointOnTriangle<Vec3>(p, tri.a, tri.b, tri.c);
-      const Vec3 offset = p - closest;
+      const Vec3 offset = p - closestPointOnTriangle<Vec3>(p, tri.a, tri.b, tri.c);
       const float distance = offset.norm();
       if (distance >= 1) continue;  // within the padding is not penetration
-      const float depth = 1 + padding - distance;
-      if (depth <= deepest) continue;
-      deepest = depth;
-      push = (distance > 1e-6f ? Vec3(offset / distance) : tri.normal) * depth;
+      const Vec3 away = distance > 1e-6f ? Vec3(offset / distance) : tri.normal;
+      p += away * (1 + padding - distance);
+      pushed = true;
+      addContact(result, worldNormal(away, toSphere), walkableNormalY);
     }
-    if (deepest <= 0) return;
-    p += push;
-    addContact(result, worldNormal(push.normalized(), toSphere), walkableNormalY);
+    if (!pushed) return;
   }
 }
 
