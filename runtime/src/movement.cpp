@@ -89,7 +89,7 @@ float violation(const Constraint& c, const Vec3& end) { return c.target - c.norm
 // (and leaves `end`) when they are too close to parallel to meet, or when
 // meeting them would pull the end into any of them.
 template <int N>
-bool meetConstraints(const std::array<const Constraint*, N>& set, Vec3& end) {
+bool meetConstraints(const std::array<const Constraint*, N>& set, float maxShift, Vec3& end) {
   Eigen::Matrix<float, N, N> m;
   Eigen::Matrix<float, N, 1> need;
   for (int r = 0; r < N; ++r) {
@@ -100,7 +100,12 @@ bool meetConstraints(const std::array<const Constraint*, N>& set, Vec3& end) {
   if (!lu.isInvertible() || std::abs(lu.determinant()) < 1e-3f) return false;
   const Eigen::Matrix<float, N, 1> amount = lu.solve(need);
   if ((amount.array() < -1e-4f).any()) return false;
-  for (int c = 0; c < N; ++c) end += amount(c) * set[c]->push;
+  Vec3 shift = Vec3::Zero();
+  for (int c = 0; c < N; ++c) shift += amount(c) * set[c]->push;
+  // Nearly parallel surfaces meet far away: going there would teleport the
+  // body. Such a crease is left to the ordinary slides.
+  if (!(shift.norm() <= maxShift)) return false;
+  end += shift;
   return true;
 }
 
@@ -120,6 +125,9 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
   result.end = desiredEnd;
   std::array<Constraint, kMaxReportedContacts> constraints;
   int constraintCount = 0;
+  // A crease solution may move the end at most this far: a frame's travel
+  // plus the body's size.
+  const float maxShift = (desiredEnd - start).norm() + std::max(radii.xz, radii.y);
   for (int iteration = 0;; ++iteration) {
     collectCandidateTriangles(world, start, result.end, radii, scratch.sweep, scratch.candidates);
     const std::optional<Hit> hit =
@@ -146,10 +154,10 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
     }
     if (back[0]) {
       Vec3 meet = result.end;
-      if (meetConstraints<2>({&added, back[0]}, meet)) {
+      if (meetConstraints<2>({&added, back[0]}, maxShift, meet)) {
         result.end = meet;
         if (back[1] && violation(*back[1], meet) > 1e-5f &&
-            meetConstraints<3>({&added, back[0], back[1]}, meet))
+            meetConstraints<3>({&added, back[0], back[1]}, maxShift, meet))
           result.end = meet;
       }
     }
