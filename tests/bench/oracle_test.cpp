@@ -41,10 +41,7 @@ TEST_CASE("the oracle measures an ellipsoid's penetration as a fraction of its s
 
 TEST_CASE("the winding-number inside test agrees with the brush planes on the arena",
           "[bench][oracle]") {
-  const std::filesystem::path dir = bspf::test::freshTempDir("oracle");
-  bspc::compileFile(bspf::test::samplesDir() / "arena.obj", dir / "arena.bspf", {});
-  const bspf::OpenResult opened = bspf::openWorld(dir / "arena.bspf");
-  REQUIRE(opened);
+  const bspf::World arena = bspf::test::compileSample("arena");
   const auto brushes =
       bspf::walkers::BrushSet::load(bspf::test::samplesDir() / "arena.brushes.txt");
   std::mt19937 rng(5);
@@ -56,7 +53,7 @@ TEST_CASE("the winding-number inside test agrees with the brush planes on the ar
     const bool surelyOutside = !brushes.insideAnySolid(p, -1e-3f);
     if (!surelyInside && !surelyOutside) continue;  // on a face: either answer is right
     INFO("point " << p.transpose());
-    REQUIRE(bspf::oracle::insideClosedMesh(opened.world.value(), p) == surelyInside);
+    REQUIRE(bspf::oracle::insideClosedMesh(arena, p) == surelyInside);
     (surelyInside ? inside : outside)++;
   }
   REQUIRE(inside > 100);
@@ -65,10 +62,7 @@ TEST_CASE("the winding-number inside test agrees with the brush planes on the ar
 
 TEST_CASE("no walker ever penetrates the arena's surfaces, with either narrow phase",
           "[bench][oracle]") {
-  const std::filesystem::path dir = bspf::test::freshTempDir("oracle");
-  bspc::compileFile(bspf::test::samplesDir() / "arena.obj", dir / "arena.bspf", {});
-  const bspf::OpenResult opened = bspf::openWorld(dir / "arena.bspf");
-  REQUIRE(opened);
+  const bspf::World arena = bspf::test::compileSample("arena");
   const auto spawns = bspf::walkers::loadSpawns(bspf::test::samplesDir() / "arena.spawns.txt");
   REQUIRE(spawns);
   for (const auto method : {bspf::CollisionMethod::ExactSweep, bspf::CollisionMethod::Planes}) {
@@ -79,15 +73,15 @@ TEST_CASE("no walker ever penetrates the arena's surfaces, with either narrow ph
       options.method = method;
       const std::vector<Vec3> starts =
           bspf::walkers::startsFromSpawns(spawns.points, options.agents);
-      bspf::walkers::Simulation sim(opened.world.value(), starts, options);
+      bspf::walkers::Simulation sim(arena, starts, options);
       bspf::SweepScratch scratch;
       std::vector<std::uint32_t> candidates;
       std::vector<double> depths;
       for (int f = 0; f < options.frames; ++f) {
         sim.step();
         for (const bspf::Body& b : sim.bodies())
-          depths.push_back(bspf::oracle::penetration(opened.world.value(), b.position, b.radii,
-                                                     scratch, candidates));
+          depths.push_back(
+              bspf::oracle::penetration(arena, b.position, b.radii, scratch, candidates));
       }
       const double worst = *std::max_element(depths.begin(), depths.end());
       const double p99 = bspf::oracle::quantile(depths, 0.99);

@@ -3,7 +3,6 @@
 #include <bspf/query.h>
 
 #include <catch2/catch.hpp>
-
 #include <fstream>
 
 #include "support/test_support.h"
@@ -23,11 +22,8 @@ std::size_t countObjFaces(const std::filesystem::path& obj) {
 
 TEST_CASE("every shared level compiles into a blob the runtime verifies",
           "[compiler][shared-levels]") {
+  BSPF_SKIP_WITHOUT_SHARED_LEVELS();
   const auto dir = bspf::test::sharedLevelsDir();
-  if (!std::filesystem::exists(dir)) {
-    WARN("skipped: " << dir << " is absent (a user's clone has no ../shared)");
-    return;
-  }
   const std::filesystem::path outDir = bspf::test::freshTempDir("levels");
   for (const std::string& name : bspf::test::sharedLevelNames()) {
     DYNAMIC_SECTION(name) {
@@ -41,9 +37,9 @@ TEST_CASE("every shared level compiles into a blob the runtime verifies",
       // Nothing is lost but what cleaning reports.
       const std::size_t faces = countObjFaces(obj);
       REQUIRE(report.clean.inputTriangles == faces);
-      REQUIRE(world.triangles().size() ==
-              faces - report.clean.droppedDegenerate - report.clean.droppedZeroArea -
-                  report.clean.droppedDuplicate);
+      REQUIRE(world.triangles().size() == faces - report.clean.droppedDegenerate -
+                                              report.clean.droppedZeroArea -
+                                              report.clean.droppedDuplicate);
       // Cleaning is a repair, not a rewrite: under 2% of a real level dropped.
       REQUIRE(world.triangles().size() > 0.98 * double(faces));
 
@@ -62,8 +58,8 @@ TEST_CASE("every shared level compiles into a blob the runtime verifies",
       int spawnCount = 0;
       while (spawns >> x >> y >> z) {
         const bspf::Vec3 centre(x, y + 0.3f, z);
-        bspf::collectCandidateTriangles(world, centre, centre - bspf::Vec3(0, 3, 0),
-                                        {0.45f, 0.85f}, scratch, candidates);
+        bspf::collectCandidateTriangles(world, centre, centre - bspf::Vec3(0, 3, 0), {0.45f, 0.85f},
+                                        scratch, candidates);
         REQUIRE(!candidates.empty());
         ++spawnCount;
       }

@@ -23,6 +23,13 @@ struct Level {
 
 bspc::Mesh floorSlab() { return bspf::test::boxMesh({-20, -1, -20}, {20, 0, 20}); }
 
+// The floor with a 4 m wall along it whose face is the plane x = 5.
+bspc::Mesh floorWithWall() {
+  bspc::Mesh mesh = floorSlab();
+  bspf::test::append(mesh, bspf::test::boxMesh({5, 0, -20}, {6, 4, 20}));
+  return mesh;
+}
+
 // A slab whose top face is a slope rising along +z at `degrees`, with its
 // foot line at z = 0, y = 0.
 bspc::Mesh slope(double degrees) {
@@ -80,8 +87,7 @@ TEST_CASE("a body hitting a wall at 45 degrees slides along it keeping its tange
           "[runtime][movement]") {
   const bspf::CollisionMethod method = eachMethod();
   INFO("method " << nameOf(method));
-  bspc::Mesh mesh = floorSlab();
-  bspf::test::append(mesh, bspf::test::boxMesh({5, 0, -20}, {6, 4, 20}));  // wall face at x = 5
+  bspc::Mesh mesh = floorWithWall();
   const Level level(mesh);
   bspf::StepScratch scratch;
   Body body = walker({0, 0.851f, 0}, method);
@@ -170,8 +176,7 @@ TEST_CASE("a body walks up a ramp", "[runtime][movement]") {
 TEST_CASE("a body pushed into a 90 degree corner settles", "[runtime][movement]") {
   const bspf::CollisionMethod method = eachMethod();
   INFO("method " << nameOf(method));
-  bspc::Mesh mesh = floorSlab();
-  bspf::test::append(mesh, bspf::test::boxMesh({5, 0, -20}, {6, 4, 20}));
+  bspc::Mesh mesh = floorWithWall();
   bspf::test::append(mesh, bspf::test::boxMesh({-20, 0, 5}, {6, 4, 6}));
   const Level level(mesh);
   bspf::StepScratch scratch;
@@ -192,8 +197,7 @@ TEST_CASE("a body pushed into a 90 degree corner settles", "[runtime][movement]"
 TEST_CASE("two bodies pushed together end apart and neither inside a wall", "[runtime][movement]") {
   const bspf::CollisionMethod method = eachMethod();
   INFO("method " << nameOf(method));
-  bspc::Mesh mesh = floorSlab();
-  bspf::test::append(mesh, bspf::test::boxMesh({5, 0, -20}, {6, 4, 20}));
+  bspc::Mesh mesh = floorWithWall();
   const Level level(mesh);
   bspf::StepScratch scratch;
   std::vector<Body> bodies{walker({3, 0.9f, 0}, method), walker({4, 0.9f, 0.1f}, method)};
@@ -300,8 +304,7 @@ TEST_CASE("the same inputs give the same trajectory, and a step leaves the world
   // The article's perpendicular-plane loop writes the offset into the stored
   // plane distance, so testing a triangle changes it for the next test. The
   // World here is read-only; repeating a scene must repeat it bit for bit.
-  bspc::Mesh mesh = floorSlab();
-  bspf::test::append(mesh, bspf::test::boxMesh({5, 0, -20}, {6, 4, 20}));
+  bspc::Mesh mesh = floorWithWall();
   bspf::test::append(mesh, slope(25));
   const Level level(mesh);
   const std::vector<std::uint8_t> before(

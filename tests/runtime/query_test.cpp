@@ -88,20 +88,11 @@ void requireNoTouchedTriangleMissed(const bspf::World& world, int sweepCount) {
   REQUIRE(double(candidateTotal) / sweepCount < 0.5 * double(world.triangles().size()));
 }
 
-bspf::World compiledSample(const std::string& name) {
-  const std::filesystem::path dir = bspf::test::freshTempDir("query");
-  const std::filesystem::path out = dir / (name + ".bspf");
-  bspc::compileFile(bspf::test::samplesDir() / (name + ".obj"), out, {});
-  bspf::OpenResult opened = bspf::openWorld(out);
-  REQUIRE(opened);
-  return *opened.world;
-}
-
 }  // namespace
 
 TEST_CASE("the swept-leaf query lists every triangle a swept ellipsoid touches, on the arena",
           "[runtime][query]") {
-  const bspf::World world = compiledSample("arena");
+  const bspf::World world = bspf::test::compileSample("arena");
   requireNoTouchedTriangleMissed(world, 4000);
 }
 
@@ -128,11 +119,8 @@ TEST_CASE("the swept-leaf query lists every triangle a swept ellipsoid touches, 
 
 TEST_CASE("the swept-leaf query lists every triangle a swept ellipsoid touches, on shared levels",
           "[runtime][query][shared-levels]") {
+  BSPF_SKIP_WITHOUT_SHARED_LEVELS();
   const auto dir = bspf::test::sharedLevelsDir();
-  if (!std::filesystem::exists(dir)) {
-    WARN("skipped: " << dir << " is absent (a user's clone has no ../shared)");
-    return;
-  }
   for (const std::string name : {"fan", "oa_dm1"}) {
     SECTION(name) {
       const std::filesystem::path out = bspf::test::freshTempDir("query") / (name + ".bspf");
@@ -146,7 +134,7 @@ TEST_CASE("the swept-leaf query lists every triangle a swept ellipsoid touches, 
 
 TEST_CASE("the swept-leaf query lists leaves in the order the path passes them",
           "[runtime][query]") {
-  const bspf::World world = compiledSample("arena");
+  const bspf::World world = bspf::test::compileSample("arena");
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> unit(0.f, 1.f);
   const Vec3 low = bspf::toVec3(*world.blob().bounds_min());

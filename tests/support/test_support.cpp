@@ -1,11 +1,12 @@
 #include "support/test_support.h"
 
+#include <sys/wait.h>
+
 #include <array>
 #include <cstdio>
 #include <fstream>
 #include <random>
 #include <sstream>
-#include <sys/wait.h>
 
 namespace bspf::test {
 
@@ -23,7 +24,8 @@ bspc::Mesh boxMesh(const Eigen::Vector3d& low, const Eigen::Vector3d& high) {
 void append(bspc::Mesh& mesh, const bspc::Mesh& part) {
   const auto base = static_cast<std::uint32_t>(mesh.vertices.size());
   mesh.vertices.insert(mesh.vertices.end(), part.vertices.begin(), part.vertices.end());
-  for (const auto& t : part.triangles) mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  for (const auto& t : part.triangles)
+    mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
 }
 
 std::vector<std::uint8_t> compile(const bspc::Mesh& mesh, const bspc::CompileSettings& settings) {
@@ -31,11 +33,18 @@ std::vector<std::uint8_t> compile(const bspc::Mesh& mesh, const bspc::CompileSet
   return bspc::compileMesh(mesh, settings, "test-mesh", report);
 }
 
+bspf::World compileSample(const std::string& name) {
+  const std::filesystem::path blob = freshTempDir("sample") / (name + ".bspf");
+  bspc::compileFile(samplesDir() / (name + ".obj"), blob, {});
+  bspf::OpenResult opened = bspf::openWorld(blob);
+  if (!opened) throw std::runtime_error(opened.message);
+  return *opened.world;
+}
+
 std::filesystem::path freshTempDir(const std::string& tag) {
   static std::mt19937_64 rng(std::random_device{}());
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() /
-      ("bspf-test-" + tag + "-" + std::to_string(rng() % 1000000000));
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("bspf-test-" + tag + "-" + std::to_string(rng() % 1000000000));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

@@ -6,10 +6,10 @@
 #include <bspf/world.h>
 
 #include <cstddef>
-#include <cstring>
-#include <span>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -55,6 +55,10 @@ void append(bspc::Mesh& mesh, const bspc::Mesh& part);
 std::vector<std::uint8_t> compile(const bspc::Mesh& mesh,
                                   const bspc::CompileSettings& settings = {});
 
+/// Compiles samples/NAME.obj with default settings into a temp directory
+/// and opens it (the World keeps its mapping alive).
+bspf::World compileSample(const std::string& name);
+
 /// A fresh empty directory under the system temp dir, removed by the caller
 /// when it likes (tests leave it for post-mortems).
 std::filesystem::path freshTempDir(const std::string& tag);
@@ -67,3 +71,14 @@ struct CommandResult {
 CommandResult run(const std::string& command);
 
 }  // namespace bspf::test
+
+/// In a Catch2 test: returns from the test, with a warning, when
+/// ../shared/levels is absent (a user's clone has none).
+#define BSPF_SKIP_WITHOUT_SHARED_LEVELS()                                  \
+  do {                                                                     \
+    if (!std::filesystem::exists(bspf::test::sharedLevelsDir())) {         \
+      WARN("skipped: " << bspf::test::sharedLevelsDir()                    \
+                       << " is absent (a user's clone has no ../shared)"); \
+      return;                                                              \
+    }                                                                      \
+  } while (false)
