@@ -9,16 +9,12 @@
 #include <cmath>
 #include <limits>
 
+#include "narrow_phase.h"
 #include "slide.h"
 
 namespace bspf {
 
 namespace {
-
-struct Impact {
-  float time = std::numeric_limits<float>::infinity();  ///< fraction of the move, [0, 1]
-  Vec3 normal = Vec3::Zero();  ///< unit, sphere space: from the contact point to the centre
-};
 
 // Smallest root in [0, 1] of a t^2 + b t + c = 0 with c >= 0 (outside at
 // t = 0) and the distance shrinking; none when the path misses.
@@ -32,9 +28,9 @@ bool earliestRoot(double a, double b, double c, double& t) {
   return true;
 }
 
-struct Triangle {
-  Vec3 a, b, c, normal;  // sphere space; normal unit, by the winding
-};
+}  // namespace
+
+namespace detail {
 
 // The earliest impact of the unit sphere moving from p along v (t in [0, 1])
 // with triangle `tri`, if it comes before `best`. In double precision, and
@@ -108,6 +104,15 @@ Triangle sphereSpaceTriangle(const World& world, std::uint32_t t, const Vec3& to
   out.normal = (out.b - out.a).cross(out.c - out.a).normalized();
   return out;
 }
+
+}  // namespace detail
+
+namespace {
+
+using detail::earliestImpact;
+using detail::Impact;
+using detail::sphereSpaceTriangle;
+using detail::Triangle;
 
 // The world-space unit normal of a sphere-space normal: normals scale by the
 // inverse of the position scale, so by (1/rxz, 1/ry, 1/rxz) again.

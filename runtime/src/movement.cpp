@@ -8,6 +8,7 @@
 #include <optional>
 #include <tuple>
 
+#include "narrow_phase.h"
 #include "slide.h"
 
 namespace bspf {
@@ -18,21 +19,6 @@ struct Hit {
   std::uint32_t triangle;
   float facing;
 };
-
-// Whether the centre point `p`, projected onto triangle `planes`' face, lies
-// inside the triangle grown by the body: all six perpendicular planes, each
-// pushed out by the body's extent along that plane's own normal (a local
-// offset; the stored plane is never modified, the article's second defect).
-bool insideGrownTriangle(const schema::TrianglePlanes& planes, const Vec3& p,
-                         EllipsoidRadii radii) {
-  for (int k = 0; k < 3; ++k) {
-    const schema::Plane& edge = *planes.edges()->Get(k);
-    if (signedDistance(edge, p) + effectiveRadius(edge.normal(), radii) < 0) return false;
-    const schema::Plane& cap = *planes.caps()->Get(k);
-    if (signedDistance(cap, p) + effectiveRadius(cap.normal(), radii) < 0) return false;
-  }
-  return true;
-}
 
 // The triangle in the way of the move start -> end with the lowest facing
 // value, if any.
@@ -46,15 +32,9 @@ std::optional<Hit> findBlockingTriangle(const World& world, const Vec3& start, c
   for (const std::uint32_t t : candidates) {
     const schema::TrianglePlanes& planes = world.trianglePlanes()[t];
     const schema::Plane& face = planes.face();
-    const float reach = effectiveRadius(face.normal(), radii);
-    const float startSide = signedDistance(face, start);
-    const float endSide = signedDistance(face, end);
-    // Pre-check. The end must be within the offset plane, and the centre must
-    // start in front of the face (a triangle is one-sided; the back of a
-    // two-sided surface is its own triangle). Unlike the article's sign test
-    // (startSide - r) * (endSide - r) < 0, this also catches a body that
-    // starts within the offset plane, which that test lets pass through.
-    if (endSide >= reach || startSide < 0) continue;
+    const detail::SideValues sides = detail::sideValues(face, start, end, radii);
+    if (!detail::passesPreCheck(sides)) continue;
+    const auto [reach, startSide, endSide] = sides;
     // Test the six planes where the centre crosses the offset plane (the
     // article leaves this position unspecified: testing the end lets fast
     // bodies skip small triangles). A body already within it is tested at
@@ -62,9 +42,10 @@ std::optional<Hit> findBlockingTriangle(const World& world, const Vec3& start, c
     bool inside;
     if (startSide >= reach) {
       const float t = (startSide - reach) / (startSide - endSide);
-      inside = insideGrownTriangle(planes, start + t * move, radii);
+      inside = detail::insideGrownTriangle(planes, start + t * move, radii);
     } else {
-      inside = insideGrownTriangle(planes, start, radii) || insideGrownTriangle(planes, end, radii);
+      inside = detail::insideGrownTriangle(planes, start, radii) ||
+               detail::insideGrownTriangle(planes, end, radii);
     }
     if (!inside) continue;
     const float facing = toVec3(face.normal()).dot(direction);

@@ -1,0 +1,78 @@
+// The per-triangle primitives of the two narrow phases (slide.h), exposed
+// for the microbenchmarks (bench/micro_bench.cpp). Private to the runtime:
+// not installed, not part of the API. The small ones are inline: they run
+// once per candidate triangle in the movement step's inner loop.
+#pragma once
+
+#include <bspf/geometry.h>
+#include <bspf/world.h>
+
+#include <cstdint>
+#include <limits>
+
+namespace bspf::detail {
+
+// ---- CollisionMethod::Planes (movement.cpp) ----
+
+/// The side values of the move start -> end against a triangle's stored face
+/// plane: the body's extent along the face normal and the signed distances
+/// of the start and end centres, metres.
+struct SideValues {
+  float reach;
+  float startSide;
+  float endSide;
+};
+
+inline SideValues sideValues(const schema::Plane& face, const Vec3& start, const Vec3& end,
+                             EllipsoidRadii radii) {
+  return {effectiveRadius(face.normal(), radii), signedDistance(face, start),
+          signedDistance(face, end)};
+}
+
+// Pre-check. The end must be within the offset plane, and the centre must
+// start in front of the face (a triangle is one-sided; the back of a
+// two-sided surface is its own triangle). Unlike the article's sign test
+// (startSide - r) * (endSide - r) < 0, this also catches a body that
+// starts within the offset plane, which that test lets pass through.
+inline bool passesPreCheck(const SideValues& s) {
+  return !(s.endSide >= s.reach || s.startSide < 0);
+}
+
+// Whether the centre point `p`, projected onto triangle `planes`' face, lies
+// inside the triangle grown by the body: all six perpendicular planes, each
+// pushed out by the body's extent along that plane's own normal (a local
+// offset; the stored plane is never modified, the article's second defect).
+inline bool insideGrownTriangle(const schema::TrianglePlanes& planes, const Vec3& p,
+                                EllipsoidRadii radii) {
+  for (int k = 0; k < 3; ++k) {
+    const schema::Plane& edge = *planes.edges()->Get(k);
+    if (signedDistance(edge, p) + effectiveRadius(edge.normal(), radii) < 0) return false;
+    const schema::Plane& cap = *planes.caps()->Get(k);
+    if (signedDistance(cap, p) + effectiveRadius(cap.normal(), radii) < 0) return false;
+  }
+  return true;
+}
+
+// ---- CollisionMethod::ExactSweep (exact_sweep.cpp), in sphere space ----
+
+struct Impact {
+  float time = std::numeric_limits<float>::infinity();  ///< fraction of the move, [0, 1]
+  Vec3 normal = Vec3::Zero();  ///< unit, sphere space: from the contact point to the centre
+};
+
+struct Triangle {
+  Vec3 a, b, c, normal;  // sphere space; normal unit, by the winding
+};
+
+// The earliest impact of the unit sphere moving from p along v (t in [0, 1])
+// with triangle `tri`, if it comes before `best`; sets `penetrating` when the
+// start is already within the unit distance of the triangle (in front of
+// it). Why it works in double precision: at its definition.
+void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best,
+                    bool& penetrating);
+
+/// Triangle `t` of `world` scaled by `toSphere` into sphere space, with its
+/// unit normal.
+Triangle sphereSpaceTriangle(const World& world, std::uint32_t t, const Vec3& toSphere);
+
+}  // namespace bspf::detail
