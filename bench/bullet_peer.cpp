@@ -1,0 +1,149 @@
+// bullet_peer.cpp: see bullet_peer.h.
+#include "bullet_peer.h"
+
+#include <btBulletCollisionCommon.h>
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+
+namespace bspf::bench {
+
+namespace {
+
+btVector3 toBt(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+Vec3 fromBt(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
+
+// The runtime's velocity model (runtime/src/movement.cpp, futureVelocity),
+// re-implemented with the same formulas: friction only when grounded, the
+// force in xz, the horizontal speed cap, then gravity.
+void futureVelocity(Body& body, const Vec3& force, float dt) {
+  const MovementSettings& s = body.settings;
+  Eigen::Vector2f horizontal(body.velocity.x(), body.velocity.z());
+  const float speed = horizontal.norm();
+  const float friction = body.grounded ? s.groundFriction : s.airFriction;
+  if (speed > 0) horizontal *= std::max(0.0f, speed - friction * dt) / speed;
+  horizontal += Eigen::Vector2f(force.x(), force.z()) * dt;
+  const float limited = horizontal.norm();
+  if (limited > s.maxHorizontalSpeed) horizontal *= s.maxHorizontalSpeed / limited;
+  body.velocity.x() = horizontal.x();
+  body.velocity.z() = horizontal.y();
+  body.velocity.y() -= s.gravity * dt;
+}
+
+struct PeerContact {
+  Vec3 normal;  // world space, unit
+  bool walkable;
+};
+
+// The runtime's respondToContacts with restitution 0: a walkable contact only
+// stops the fall; any other removes the velocity's component into it, a steep
+// upward-facing one along its levelled normal (so it stops a run like a wall).
+void respondToContacts(Body& body, const PeerContact* contacts, int count) {
+  for (int i = 0; i < count; ++i) {
+    Vec3 normal = contacts[i].normal;
+    if (!contacts[i].walkable && normal.y() > 0) {
+      const Vec3 level(normal.x(), 0, normal.z());
+      if (level.squaredNorm() > 1e-6f) normal = level.normalized();
+    }
+    const float into = body.velocity.dot(normal);
+    if (into >= 0) continue;
+    if (contacts[i].walkable)
+      body.velocity.y() = std::max(body.velocity.y(), 0.0f);
+    else
+      body.velocity -= into * normal;
+  }
+}
+
+}  // namespace
+
+struct BulletPeer::Impl {
+  EllipsoidRadii radii;
+  btTriangleMesh mesh{true, false};  // 32-bit indices, 3-component vertices
+  std::unique_ptr<btBvhTriangleMeshShape> levelShape;
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher{&configuration};
+  btDbvtBroadphase broadphase;
+  std::unique_ptr<btCollisionWorld> collisionWorld;
+  btCollisionObject level;
+  btSphereShape sphere{1.0f};  // margin = radius: a point plus margin, exact
+};
+
+BulletPeer::BulletPeer(const World& world, EllipsoidRadii radii) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.radii = radii;
+  const Vec3 toSphere(1 / radii.xz, 1 / radii.y, 1 / radii.xz);
+  auto corner = [&](std::uint32_t v) {
+    return toBt(toVec3(world.vertices()[v]).cwiseProduct(toSphere));
+  };
+  m.mesh.preallocateVertices(int(world.vertices().size()));
+  for (const schema::Triangle& t : world.triangles())
+    m.mesh.addTriangle(corner(t.v0()), corner(t.v1()), corner(t.v2()), false);
+  m.levelShape = std::make_unique<btBvhTriangleMeshShape>(&m.mesh, true, true);
+  m.levelShape->setMargin(0);  // triangles are not inflated
+  m.level.setCollisionShape(m.levelShape.get());
+  m.level.setCollisionFlags(btCollisionObject::CF_STATIC_OBJECT);
+  m.collisionWorld =
+      std::make_unique<btCollisionWorld>(&m.dispatcher, &m.broadphase, &m.configuration);
+  m.collisionWorld->addCollisionObject(&m.level);
+  m.collisionWorld->updateAabbs();
+}
+
+BulletPeer::~BulletPeer() {
+  if (impl_ && impl_->collisionWorld) impl_->collisionWorld->removeCollisionObject(&impl_->level);
+}
+
+void BulletPeer::step(Body& body, const Vec3& force, float dt, int maxIterations,
+                      StepReport& report) const {
+  const Impl& m = *impl_;
+  report = StepReport{};
+  futureVelocity(body, force, dt);
+  const Vec3 toSphere(1 / m.radii.xz, 1 / m.radii.y, 1 / m.radii.xz);
+  const float walkableY =
+      std::cos(body.settings.walkableSlopeDegrees * std::numbers::pi_v<float> / 180.0f);
+  btVector3 position = toBt(body.position.cwiseProduct(toSphere));
+  btVector3 target = position + toBt((body.velocity * dt).cwiseProduct(toSphere));
+  std::array<PeerContact, kMaxReportedContacts> contacts;
+  int contactCount = 0;
+  btTransform from = btTransform::getIdentity(), to = btTransform::getIdentity();
+  for (int iteration = 0;; ++iteration) {
+    const btVector3 move = target - position;
+    if (move.length2() < 1e-12f) break;
+    from.setOrigin(position);
+    to.setOrigin(target);
+    btCollisionWorld::ClosestConvexResultCallback hit(position, target);
+    m.collisionWorld->convexSweepTest(&m.sphere, from, to, hit);
+    if (!hit.hasHit()) {
+      position = target;
+      break;
+    }
+    if (iteration == maxIterations) {  // still blocked: stay at the last safe position
+      report.refused = true;
+      break;
+    }
+    btVector3 normal = hit.m_hitNormalWorld.normalized();
+    if (normal.dot(move) > 0) normal = -normal;  // two-sided mesh: face the motion
+    // Sphere-space normal n to world space: proportional to n / radii.
+    const Vec3 worldNormal = fromBt(normal).cwiseProduct(toSphere).normalized();
+    // `skin` metres along the world normal is skin / effectiveRadius in sphere space.
+    const float skin = body.settings.skin / effectiveRadius(worldNormal, m.radii);
+    position = position.lerp(target, hit.m_closestHitFraction) + normal * skin;
+    btVector3 rest = target - position;
+    rest -= normal * rest.dot(normal);
+    target = position + rest;
+    ++report.iterations;
+    if (contactCount < kMaxReportedContacts)
+      contacts[contactCount++] = {worldNormal, worldNormal.y() >= walkableY};
+  }
+  body.position = fromBt(position).cwiseQuotient(toSphere);
+  respondToContacts(body, contacts.data(), contactCount);
+  body.grounded = std::any_of(contacts.begin(), contacts.begin() + contactCount,
+                              [](const PeerContact& c) { return c.walkable; });
+  report.grounded = body.grounded;
+  report.contactCount = contactCount;
+  for (int i = 0; i < contactCount; ++i) report.contactNormals[i] = contacts[i].normal;
+}
+
+}  // namespace bspf::bench

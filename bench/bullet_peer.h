@@ -1,0 +1,49 @@
+// bullet_peer.h: a Bullet-based peer of the runtime's movement step, for the
+// speed/accuracy sweep (bspf_sweep). Built only when CMake finds Bullet.
+//
+// The level's triangles go into one btBvhTriangleMeshShape, every vertex
+// scaled by (1/rxz, 1/ry, 1/rxz): in that space the body's ellipsoid is the
+// unit sphere (btSphereShape(1)). A step uses the runtime's velocity model
+// (friction when grounded, input force in xz, horizontal speed cap, gravity),
+// then "collide and slide": up to maxIterations convex sweeps of the sphere
+// (ClosestConvexResultCallback), each advancing to the hit, backing off
+// `skin` metres along the hit normal and projecting the rest of the move onto
+// the hit plane; a move still blocked after that is refused (the body stays
+// at its last safe position). Contacts then update the velocity exactly as
+// the runtime's respondToContacts does with restitution 0.
+//
+// Margins: the sphere's margin is its radius (Bullet models a sphere as a
+// point plus margin), so the sweep is exact for it; the mesh's margin is set
+// to 0, so triangles are not inflated. Bullet's triangle mesh is two-sided
+// (the runtime's triangles are one-sided); hit normals are oriented against
+// the motion.
+#pragma once
+
+#include <bspf/movement.h>
+#include <bspf/world.h>
+
+#include <memory>
+
+namespace bspf::bench {
+
+class BulletPeer {
+ public:
+  /// Builds the mesh of `world` for bodies of `radii` (every body stepped
+  /// must have these radii). The world must outlive nothing: the peer copies
+  /// the triangles.
+  BulletPeer(const World& world, EllipsoidRadii radii);
+  ~BulletPeer();
+  BulletPeer(const BulletPeer&) = delete;
+  BulletPeer& operator=(const BulletPeer&) = delete;
+
+  /// Advances `body` by `dt` (its settings' frictions, speed cap, gravity,
+  /// walkable slope and skin apply; restitution is taken as 0) with at most
+  /// `maxIterations` slides. Fills `report`'s iterations, refused and grounded.
+  void step(Body& body, const Vec3& force, float dt, int maxIterations, StepReport& report) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace bspf::bench
