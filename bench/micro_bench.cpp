@@ -1,0 +1,311 @@
+// bspf_micro_bench: Google Benchmark microbenchmarks of the collision
+// primitives, one call per iteration (so the time is ns per call):
+//   PreCheck            the planes method's side-value pre-check of one
+//                       candidate on its stored face plane;
+//   InsideGrownTriangle its six-plane test of one point;
+//   EarliestImpact      the exact sweep of the unit sphere against one
+//                       sphere-space triangle, and ExactPerTriangle the same
+//                       with the triangle scaled into sphere space first (as
+//                       slideExact does for every candidate);
+//   CandidateTriangles  collectCandidateTriangles for one frame's move;
+//   StepBody            a whole stepBody, for each method.
+// The inputs are realistic and deterministic: the states of the `walkers`
+// crowd (samples/walkers_sim.h: 64 agents walking at 6 m/s, dt 1/60, radii
+// 0.45/0.85) on samples/arena.obj, compiled in memory, and on
+// ../shared/levels/oa_dm5.obj when present, with the candidates and points
+// each narrow phase meets. Thousands of them are cycled through, in the order
+// the crowd met them, so branch prediction sees a realistic mix.
+#include <benchmark/benchmark.h>
+#include <bspc/compile.h>
+#include <bspc/import.h>
+#include <bspf/movement.h>
+#include <bspf/query.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "narrow_phase.h"
+#include "walkers_sim.h"
+
+namespace {
+
+using bspf::Body;
+using bspf::CollisionMethod;
+using bspf::Vec3;
+using bspf::World;
+
+constexpr float kDt = 1.0f / 60;
+constexpr bspf::EllipsoidRadii kRadii{0.45f, 0.85f};
+// Each input list holds at most this many entries.
+constexpr std::size_t kMaxInputs = 1 << 15;
+
+struct BodyState {
+  Body body;
+  Vec3 force;
+};
+
+struct PreCheckInput {
+  const bspf::schema::Plane* face;
+  Vec3 start, end;
+};
+
+struct PointInput {
+  const bspf::schema::TrianglePlanes* planes;
+  Vec3 point;
+};
+
+struct SweepInput {
+  bspf::detail::Triangle triangle;  // sphere space
+  std::uint32_t index;              // in the world
+  Vec3 p, v;                        // sphere space
+};
+
+struct Move {
+  Vec3 from, to;
+};
+
+struct Level {
+  std::string name;
+  std::vector<std::uint8_t> blob;
+  std::optional<World> world;
+  std::vector<BodyState> planesStates, exactStates;
+  std::vector<Move> moves;
+  std::vector<PreCheckInput> preChecks;
+  std::vector<PointInput> points;
+  std::vector<SweepInput> sweeps;
+};
+
+// Every 8th body state of frames 30 to 630 of the walkers crowd (after the
+// spawn drop) with `method`.
+std::vector<BodyState> crowdStates(const World& world, std::span<const Vec3> spawns,
+                                   CollisionMethod method) {
+  bspf::walkers::Options options;
+  options.method = method;
+  const std::vector<Vec3> starts = bspf::walkers::startsFromSpawns(spawns, options.agents);
+  bspf::walkers::Simulation crowd(world, starts, options);
+  std::vector<BodyState> states;
+  long long n = 0;
+  for (int frame = 0; frame < 630; ++frame)
+    crowd.step([&](std::span<const Body> bodies, std::span<const Vec3> forces) {
+      if (frame < 30) return;
+      for (std::size_t i = 0; i < bodies.size(); ++i)
+        if (n++ % 8 == 0) states.push_back({bodies[i], forces[i]});
+    });
+  return states;
+}
+
+// The move stepBody asks of the level in state `s`: one frame of its walk
+// (futureVelocity in movement.cpp, friction left out: the force keeps the
+// walkers at full speed).
+Move desiredMove(const BodyState& s) {
+  const bspf::MovementSettings& settings = s.body.settings;
+  Vec3 v = s.body.velocity + Vec3(s.force.x(), 0, s.force.z()) * kDt;
+  const float horizontal = std::hypot(v.x(), v.z());
+  if (horizontal > settings.maxHorizontalSpeed) {
+    v.x() *= settings.maxHorizontalSpeed / horizontal;
+    v.z() *= settings.maxHorizontalSpeed / horizontal;
+  }
+  v.y() -= settings.gravity * kDt;
+  return {s.body.position, s.body.position + v * kDt};
+}
+
+// The inputs each primitive meets in the first slide iteration of each
+// state's move.
+void gatherInputs(Level& level) {
+  const World& world = *level.world;
+  bspf::SweepScratch scratch;
+  std::vector<std::uint32_t> candidates;
+  for (const BodyState& s : level.planesStates) {
+    const Move m = desiredMove(s);
+    level.moves.push_back(m);
+    collectCandidateTriangles(world, m.from, m.to, kRadii, scratch, candidates);
+    for (const std::uint32_t t : candidates) {
+      const bspf::schema::TrianglePlanes& planes = world.trianglePlanes()[t];
+      level.preChecks.push_back({&planes.face(), m.from, m.to});
+      // The points findBlockingTriangle tests.
+      const bspf::detail::SideValues sides =
+          bspf::detail::sideValues(planes.face(), m.from, m.to, kRadii);
+      if (!bspf::detail::passesPreCheck(sides)) continue;
+      if (sides.startSide >= sides.reach) {
+        const float f = (sides.startSide - sides.reach) / (sides.startSide - sides.endSide);
+        level.points.push_back({&planes, m.from + f * (m.to - m.from)});
+      } else {
+        level.points.push_back({&planes, m.from});
+        level.points.push_back({&planes, m.to});
+      }
+    }
+  }
+  const Vec3 toSphere(1 / kRadii.xz, 1 / kRadii.y, 1 / kRadii.xz);
+  for (const BodyState& s : level.exactStates) {
+    const Move m = desiredMove(s);
+    collectCandidateTriangles(world, m.from, m.to, kRadii, scratch, candidates);
+    for (const std::uint32_t t : candidates) {
+      // The candidates slideExact sweeps: those its pre-check passes.
+      const bspf::schema::Plane& face = world.trianglePlanes()[t].face();
+      const float reach = bspf::effectiveRadius(face.normal(), kRadii) * 1.0001f + 1e-5f;
+      const float startSide = bspf::signedDistance(face, m.from);
+      if (startSide < -1e-5f || std::min(startSide, bspf::signedDistance(face, m.to)) > reach)
+        continue;
+      level.sweeps.push_back({bspf::detail::sphereSpaceTriangle(world, t, toSphere), t,
+                              m.from.cwiseProduct(toSphere),
+                              (m.to - m.from).cwiseProduct(toSphere)});
+    }
+  }
+  auto cap = [](auto& inputs) {
+    if (inputs.size() > kMaxInputs) inputs.resize(kMaxInputs);
+  };
+  cap(level.moves);
+  cap(level.preChecks);
+  cap(level.points);
+  cap(level.sweeps);
+}
+
+// `<base>.obj` compiled in memory with the default settings, and the crowd
+// started at `<base>.spawns.txt`. Null (with a message) when it cannot.
+std::unique_ptr<Level> loadLevel(const std::filesystem::path& base) {
+  auto level = std::make_unique<Level>();
+  level->name = base.filename().string();
+  try {
+    bspc::CompileSettings settings;
+    bspc::CompileReport report;
+    const bspc::Mesh mesh = bspc::importMesh(base.string() + ".obj", settings.import);
+    level->blob = bspc::compileMesh(mesh, settings, level->name, report);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bspf_micro_bench: %s\n", e.what());
+    return nullptr;
+  }
+  bspf::OpenResult opened =
+      bspf::viewWorld({reinterpret_cast<const std::byte*>(level->blob.data()), level->blob.size()});
+  const bspf::walkers::Points spawns = bspf::walkers::loadSpawns(base.string() + ".spawns.txt");
+  if (!opened || !spawns) {
+    std::fprintf(stderr, "bspf_micro_bench: %s\n",
+                 !opened ? opened.message.c_str() : spawns.error.c_str());
+    return nullptr;
+  }
+  level->world = std::move(opened.world);
+  level->planesStates = crowdStates(*level->world, spawns.points, CollisionMethod::Planes);
+  level->exactStates = crowdStates(*level->world, spawns.points, CollisionMethod::ExactSweep);
+  gatherInputs(*level);
+  return level;
+}
+
+// Calls `call` on one input per iteration, cycling through `in`, and labels
+// the row with how many inputs there are.
+template <typename Input, typename Call>
+void cycle(benchmark::State& state, const std::vector<Input>& in, Call call) {
+  std::size_t i = 0;
+  for (auto _ : state) {
+    call(in[i]);
+    i = i + 1 == in.size() ? 0 : i + 1;
+  }
+  state.SetLabel(std::to_string(in.size()) + " inputs");
+}
+
+void preCheck(benchmark::State& state, const Level& level) {
+  cycle(state, level.preChecks, [](const PreCheckInput& x) {
+    bool passes =
+        bspf::detail::passesPreCheck(bspf::detail::sideValues(*x.face, x.start, x.end, kRadii));
+    benchmark::DoNotOptimize(passes);
+  });
+}
+
+void insideGrownTriangle(benchmark::State& state, const Level& level) {
+  cycle(state, level.points, [](const PointInput& x) {
+    bool inside = bspf::detail::insideGrownTriangle(*x.planes, x.point, kRadii);
+    benchmark::DoNotOptimize(inside);
+  });
+}
+
+void earliestImpact(benchmark::State& state, const Level& level) {
+  cycle(state, level.sweeps, [](const SweepInput& x) {
+    bspf::detail::Impact impact;
+    bool penetrating = false;
+    bspf::detail::earliestImpact(x.triangle, x.p, x.v, impact, penetrating);
+    benchmark::DoNotOptimize(impact);
+    benchmark::DoNotOptimize(penetrating);
+  });
+}
+
+// earliestImpact with the triangle scaled into sphere space first, as
+// slideExact does for each candidate.
+void exactPerTriangle(benchmark::State& state, const Level& level) {
+  const Vec3 toSphere(1 / kRadii.xz, 1 / kRadii.y, 1 / kRadii.xz);
+  cycle(state, level.sweeps, [&](const SweepInput& x) {
+    bspf::detail::Impact impact;
+    bool penetrating = false;
+    bspf::detail::earliestImpact(bspf::detail::sphereSpaceTriangle(*level.world, x.index, toSphere),
+                                 x.p, x.v, impact, penetrating);
+    benchmark::DoNotOptimize(impact);
+    benchmark::DoNotOptimize(penetrating);
+  });
+}
+
+void candidateTriangles(benchmark::State& state, const Level& level) {
+  bspf::SweepScratch scratch;
+  std::vector<std::uint32_t> candidates;
+  std::size_t total = 0;
+  cycle(state, level.moves, [&](const Move& m) {
+    collectCandidateTriangles(*level.world, m.from, m.to, kRadii, scratch, candidates);
+    benchmark::DoNotOptimize(candidates.data());
+    benchmark::ClobberMemory();
+    total += candidates.size();
+  });
+  state.counters["candidates"] = benchmark::Counter(double(total) / double(state.iterations()));
+}
+
+void stepBody(benchmark::State& state, const Level& level, CollisionMethod method) {
+  bspf::StepScratch scratch;
+  cycle(state, method == CollisionMethod::Planes ? level.planesStates : level.exactStates,
+        [&](const BodyState& s) {
+          Body body = s.body;
+          bspf::stepBody(*level.world, body, s.force, kDt, scratch);
+          benchmark::DoNotOptimize(body.position);
+        });
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  const std::filesystem::path source = BSPF_SOURCE_DIR;
+  std::vector<std::filesystem::path> bases{source / "samples/arena"};
+  if (std::filesystem::exists(source / "../shared/levels/oa_dm5.obj"))
+    bases.push_back(source / "../shared/levels/oa_dm5");
+  std::vector<std::unique_ptr<Level>> levels;
+  for (const auto& base : bases) {
+    std::unique_ptr<Level> level = loadLevel(base);
+    if (!level) return 1;
+    levels.push_back(std::move(level));
+  }
+  for (const auto& owned : levels) {
+    const Level& level = *owned;
+    const std::string suffix = "/" + level.name;
+    benchmark::RegisterBenchmark(("PreCheck" + suffix).c_str(), preCheck, std::cref(level));
+    benchmark::RegisterBenchmark(("InsideGrownTriangle" + suffix).c_str(), insideGrownTriangle,
+                                 std::cref(level));
+    benchmark::RegisterBenchmark(("EarliestImpact" + suffix).c_str(), earliestImpact,
+                                 std::cref(level));
+    benchmark::RegisterBenchmark(("ExactPerTriangle" + suffix).c_str(), exactPerTriangle,
+                                 std::cref(level));
+    benchmark::RegisterBenchmark(("CandidateTriangles" + suffix).c_str(), candidateTriangles,
+                                 std::cref(level));
+    benchmark::RegisterBenchmark(("StepBody/planes" + suffix).c_str(), stepBody, std::cref(level),
+                                 CollisionMethod::Planes);
+    benchmark::RegisterBenchmark(("StepBody/exact" + suffix).c_str(), stepBody, std::cref(level),
+                                 CollisionMethod::ExactSweep);
+  }
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
