@@ -202,7 +202,6 @@ struct RunInput {
   std::span<const Vec3> starts;
   int frames;
   std::uint64_t seed;
-  int repeats;
 };
 
 // The reference end of one step from `body`'s state: the exact sweep with 32
@@ -217,46 +216,41 @@ Vec3 referenceEnd(const bspf::World& world, const Body& body, const Vec3& force,
   return reference.position;
 }
 
-Result run(const RunInput& in, const FrameStepper& stepFrame) {
-  Result result;
-  result.frames = in.frames;
-  std::vector<double> repeatNs;
+// One pass of a run from the starts: returns the median over frames of the
+// frame's stepping time per agent, ns. With `measure`, also fills it with the
+// accuracy figures (outside the timed part; they slow the pass down).
+double pass(const RunInput& in, const FrameStepper& stepFrame, Result* measure) {
   std::vector<bspf::StepReport> reports(in.starts.size());
-  // Repeats 0..repeats-1 are timed only; the last pass measures accuracy.
-  for (int pass = 0; pass <= in.repeats; ++pass) {
-    const bool measure = pass == in.repeats;
-    Crowd crowd(in.starts, in.config.settings, in.seed);
-    std::vector<double> frameNs;
-    bspf::StepScratch oracleScratch;
-    std::vector<std::uint32_t> candidates;
-    std::vector<Vec3> references(in.starts.size());
-    for (int frame = 0; frame < in.frames; ++frame) {
-      crowd.steer(in.config.dt);
-      std::vector<Body>& bodies = crowd.bodies();
-      if (measure)
-        for (std::size_t i = 0; i < bodies.size(); ++i)
-          references[i] =
-              referenceEnd(in.world, bodies[i], crowd.forces()[i], in.config.dt, oracleScratch);
-      const auto start = std::chrono::steady_clock::now();
-      stepFrame(bodies, crowd.forces(), in.config.dt, reports);
-      const auto stop = std::chrono::steady_clock::now();
-      frameNs.push_back(std::chrono::duration<double, std::nano>(stop - start).count() /
-                        double(bodies.size()));
-      if (!measure) continue;
-      for (std::size_t i = 0; i < bodies.size(); ++i) {
-        result.deviations.push_back((bodies[i].position - references[i]).cast<double>().norm());
-        result.penetrations.push_back(bspf::oracle::penetration(
-            in.world, bodies[i].position, kRadii, oracleScratch.sweep, candidates));
-        result.refused += reports[i].refused;
-        result.iterations += reports[i].iterations;
-      }
-      result.insideSolid += bspf::walkers::countInsideSolid(in.level.brushes, bodies);
-      result.steps += long(bodies.size());
+  Crowd crowd(in.starts, in.config.settings, in.seed);
+  std::vector<double> frameNs;
+  bspf::StepScratch oracleScratch;
+  std::vector<std::uint32_t> candidates;
+  std::vector<Vec3> references(in.starts.size());
+  for (int frame = 0; frame < in.frames; ++frame) {
+    crowd.steer(in.config.dt);
+    std::vector<Body>& bodies = crowd.bodies();
+    if (measure)
+      for (std::size_t i = 0; i < bodies.size(); ++i)
+        references[i] =
+            referenceEnd(in.world, bodies[i], crowd.forces()[i], in.config.dt, oracleScratch);
+    const auto start = std::chrono::steady_clock::now();
+    stepFrame(bodies, crowd.forces(), in.config.dt, reports);
+    const auto stop = std::chrono::steady_clock::now();
+    frameNs.push_back(std::chrono::duration<double, std::nano>(stop - start).count() /
+                      double(bodies.size()));
+    if (!measure) continue;
+    for (std::size_t i = 0; i < bodies.size(); ++i) {
+      measure->deviations.push_back((bodies[i].position - references[i]).cast<double>().norm());
+      measure->penetrations.push_back(bspf::oracle::penetration(
+          in.world, bodies[i].position, kRadii, oracleScratch.sweep, candidates));
+      measure->refused += reports[i].refused;
+      measure->iterations += reports[i].iterations;
     }
-    if (!measure) repeatNs.push_back(median(frameNs));
+    measure->insideSolid += bspf::walkers::countInsideSolid(in.level.brushes, bodies);
+    measure->steps += long(bodies.size());
   }
-  result.nsPerStep = median(repeatNs);
-  return result;
+  if (measure) measure->frames = in.frames;
+  return median(frameNs);
 }
 
 std::string number(double v) {
@@ -373,26 +367,40 @@ int main(int argc, char** argv) {
 #ifdef BSPF_HAVE_BULLET
       const bspf::bench::BulletPeer peer(*compiled.at(kDefaultLeaf).world, kRadii);
 #endif
-      for (std::size_t k = 0; k < configs.size(); ++k) {
-        const Config& c = configs[k];
-        const bspf::World& world = *compiled.at(c.leaf).world;
-        bspf::StepScratch scratch;
-        FrameStepper stepFrame = [&](std::span<Body> bodies, std::span<const Vec3> forces, float dt,
-                                     std::span<bspf::StepReport> reports) {
+      bspf::StepScratch scratch;
+      std::vector<RunInput> inputs;
+      std::vector<FrameStepper> steppers;
+      for (const Config& c : configs) {
+        const bspf::World* world = &*compiled.at(c.leaf).world;
+        const int runFrames = std::max(1, int(std::lround(frames * kDefaultDt / c.dt)));
+        inputs.push_back({*world, level, c, starts, runFrames, seed});
+        steppers.push_back([world, &scratch](std::span<Body> bodies, std::span<const Vec3> forces,
+                                             float dt, std::span<bspf::StepReport> reports) {
           for (std::size_t i = 0; i < bodies.size(); ++i)
-            bspf::stepBody(world, bodies[i], forces[i], dt, scratch, &reports[i]);
-        };
+            bspf::stepBody(*world, bodies[i], forces[i], dt, scratch, &reports[i]);
+        });
 #ifdef BSPF_HAVE_BULLET
         if (c.method == Method::Bullet)
-          stepFrame = [&](std::span<Body> bodies, std::span<const Vec3> forces, float dt,
-                          std::span<bspf::StepReport> reports) {
+          steppers.back() = [&peer, iterations = c.settings.maxIterations](
+                                std::span<Body> bodies, std::span<const Vec3> forces, float dt,
+                                std::span<bspf::StepReport> reports) {
             for (std::size_t i = 0; i < bodies.size(); ++i)
-              peer.step(bodies[i], forces[i], dt, c.settings.maxIterations, reports[i]);
+              peer.step(bodies[i], forces[i], dt, iterations, reports[i]);
           };
 #endif
-        const int runFrames = std::max(1, int(std::lround(frames * kDefaultDt / c.dt)));
-        Result r = run({world, level, c, starts, runFrames, seed, repeats}, stepFrame);
-        rows.push_back(row(level.name, c, agents, r));
+      }
+      // The timed passes, interleaved: each repeat runs every configuration
+      // once, so a burst of other load on the machine spreads over the
+      // configurations instead of spoiling all repeats of one.
+      std::vector<std::vector<double>> repeatNs(configs.size());
+      for (int repeat = 0; repeat < repeats; ++repeat)
+        for (std::size_t k = 0; k < configs.size(); ++k)
+          repeatNs[k].push_back(pass(inputs[k], steppers[k], nullptr));
+      for (std::size_t k = 0; k < configs.size(); ++k) {
+        Result r;
+        pass(inputs[k], steppers[k], &r);  // the same trajectories, measured
+        r.nsPerStep = median(repeatNs[k]);
+        rows.push_back(row(level.name, configs[k], agents, r));
         std::fprintf(stderr, "bspf_sweep: %s\n", rows.back().c_str());
         Result& all = pooled[k];
         levelNs[k].push_back(r.nsPerStep);
