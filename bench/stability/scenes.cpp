@@ -314,11 +314,13 @@ Scene abuttingSlabs() {
 }
 
 // A ramp rising along +x from x = 0 at `degrees` to a 3 m high platform; one
-// body walks up it, one is set down on it (no input).
-Scene slope(float degrees) {
+// body walks up it, one is set down on it (no input). `stepHeight` > 0: with
+// the step-up mitigation, which must not climb a steep slope either.
+Scene slope(float degrees, float stepHeight = 0) {
   Scene s;
   const bool walkable = degrees <= 45;
   s.name = format("slope at %.0f degrees (walkable limit 45)", degrees);
+  if (stepHeight > 0) s.name += format(", step-up %.2f m (mitigation)", stepHeight);
   s.goal = walkable ? "walks up onto the platform; a body set on the slope stays (< 1 cm)"
                     : "cannot walk up (rises < 0.3 m); a body set on the slope slides down";
   s.level = floorSlab();
@@ -334,6 +336,7 @@ Scene slope(float degrees) {
   const float reach = effectiveRadius(normal, kRadii);
   s.bodies.push_back(
       walker(Vec3(float(length / 2), float(height / 2), 2) + normal * (reach + 0.01f)));
+  for (Body& b : s.bodies) b.settings.maxStepHeight = stepHeight;
   s.force = constantForces({Vec3(kWalkForce, 0, 0), Vec3::Zero()});
   s.frames = 240;
   s.checkGoal = [walkable, height, length](const Trajectory& run, const Trajectory*) {
@@ -354,9 +357,11 @@ Scene slope(float degrees) {
   return s;
 }
 
-Scene stairs(float riser) {
+// `stepHeight` > 0: with the step-up mitigation (MovementSettings::maxStepHeight).
+Scene stairs(float riser, float stepHeight = 0) {
   Scene s;
   s.name = format("stairs, %.2f m risers", riser);
+  if (stepHeight > 0) s.name += format(", step-up %.2f m (mitigation)", stepHeight);
   s.goal = "walks to the top of 8 steps";
   s.level = floorSlab();
   constexpr int kSteps = 8;
@@ -364,6 +369,7 @@ Scene stairs(float riser) {
   for (int k = 0; k < kSteps; ++k)
     addBox(s.level, {k * kTread, 0, -2}, {kSteps * kTread + 30, (k + 1) * riser, 2});
   s.bodies.push_back(walker({-2, kStandY, 0}));
+  s.bodies.back().settings.maxStepHeight = stepHeight;
   s.force = constantForces({Vec3(kWalkForce, 0, 0)});
   s.frames = 180;
   const float top = kSteps * riser;
@@ -601,6 +607,10 @@ std::vector<Scene> failureScenes() {
   scenes.push_back(slope(46));
   scenes.push_back(stairs(0.15f));
   scenes.push_back(stairs(0.30f));
+  scenes.push_back(slope(44, 0.35f));
+  scenes.push_back(slope(46, 0.35f));
+  scenes.push_back(stairs(0.15f, 0.35f));
+  scenes.push_back(stairs(0.30f, 0.35f));
   scenes.push_back(farFromOrigin());
   scenes.push_back(crowdIntoWall());
   scenes.push_back(slivers());

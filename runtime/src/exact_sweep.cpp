@@ -87,11 +87,11 @@ void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact&
       const V centre = t * v;
       const double along = (centre - e0).dot(d) / dd;
       if (along >= 0 && along <= 1)
-        best = {float(t), (centre - (e0 + along * d)).normalized().cast<float>()};
+        best = {float(t), (centre - (e0 + along * d)).normalized().cast<float>(), true};
     }
     // Corner k.
     if (earliestRoot(v.squaredNorm(), -2 * v.dot(e0), e0.squaredNorm() - 1, t) && t < best.time)
-      best = {float(t), (t * v - e0).normalized().cast<float>()};
+      best = {float(t), (t * v - e0).normalized().cast<float>(), true};
   }
 }
 
@@ -120,9 +120,9 @@ Vec3 worldNormal(const Vec3& sphereNormal, const Vec3& toSphere) {
   return sphereNormal.cwiseProduct(toSphere).normalized();
 }
 
-void addContact(SlideResult& result, const Vec3& normal, float walkableNormalY) {
+void addContact(SlideResult& result, const Vec3& normal, float walkableNormalY, bool edge = false) {
   if (result.contactCount < kMaxReportedContacts)
-    result.contacts[result.contactCount++] = {normal, normal.y() >= walkableNormalY};
+    result.contacts[result.contactCount++] = {normal, normal.y() >= walkableNormalY, edge};
 }
 
 // Pushes a centre that starts within the unit distance of triangles (in
@@ -238,7 +238,7 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     if (planeCount < int(planes.size())) planes[planeCount++] = impact.normal;
     move = rest;
     ++result.iterations;
-    addContact(result, normal, walkableNormalY);
+    addContact(result, normal, walkableNormalY, impact.edge);
   }
   result.end = p.cwiseQuotient(toSphere);
   return result;

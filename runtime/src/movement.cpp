@@ -219,12 +219,72 @@ void record(StepReport* report, const SlideResult& slide, bool ownMove) {
     report->contactNormals[report->contactCount++] = slide.contacts[i].normal;
 }
 
+// How far a slide got along the horizontal direction of `move`, metres.
+float horizontalProgress(const Vec3& start, const Vec3& end, const Vec3& move) {
+  const Vec3 along(move.x(), 0, move.z());
+  const float length = along.norm();
+  return length > 0 ? (end - start).dot(along) / length : 0;
+}
+
+// Stairs: a grounded body whose horizontal move was blocked retries it lifted
+// by maxStepHeight (up, across, then down onto the step), and keeps the retry
+// when it lands on walkable ground further along than the plain slide. The
+// slides are the narrow phase's own, so a step-up never enters a wall; a
+// ceiling lower than the lift just lifts less.
+void tryStepUp(const World& world, const Body& body, const Vec3& start, const Vec3& desiredEnd,
+               float walkableY, StepScratch& scratch, SlideResult& slide) {
+  const Vec3 move = desiredEnd - start;
+  const Vec3 across(move.x(), 0, move.z());
+  const float plainProgress = horizontalProgress(start, slide.end, move);
+  // Only a move stopped short by something steep is retried.
+  bool blocked = false;
+  for (int i = 0; i < slide.contactCount; ++i) blocked = blocked || !slide.contacts[i].walkable;
+  if (!blocked || across.norm() - plainProgress < 1e-4f) return;
+
+  const MovementSettings& s = body.settings;
+  const SlideResult up = slideAgainstLevel(world, start, start + Vec3(0, s.maxStepHeight, 0),
+                                           body.radii, s, walkableY, scratch);
+  const SlideResult over =
+      slideAgainstLevel(world, up.end, up.end + across, body.radii, s, walkableY, scratch);
+  // Down by the lift and by the move's own fall.
+  const float drop = (up.end.y() - start.y()) + std::max(0.0f, -move.y());
+  const SlideResult down = slideAgainstLevel(world, over.end, over.end - Vec3(0, drop, 0),
+                                             body.radii, s, walkableY, scratch);
+  auto walkable = [](const SlideResult& r) {
+    return std::any_of(r.contacts.begin(), r.contacts.begin() + r.contactCount,
+                       [](const Contact& c) { return c.walkable; });
+  };
+  // A rounded body (the exact sweep) comes down on the step's edge before
+  // its centre is over the step: an edge contact facing up, higher than the
+  // start, is standing on a step. (A steep slope's face still refuses.)
+  const bool onStepEdge =
+      !walkable(down) && down.end.y() > start.y() + 1e-3f &&
+      std::any_of(down.contacts.begin(), down.contacts.begin() + down.contactCount,
+                  [](const Contact& c) { return c.edge && c.normal.y() > 0; });
+  if (!walkable(down) && !onStepEdge) return;
+  if (up.refused || over.refused || down.refused ||
+      horizontalProgress(start, down.end, move) <= plainProgress + 1e-4f)
+    return;
+  SlideResult stepped = down;
+  stepped.iterations = up.iterations + over.iterations + down.iterations;
+  stepped.contactCount = 0;
+  for (const SlideResult* part : {&over, &down})
+    for (int i = 0; i < part->contactCount && stepped.contactCount < kMaxReportedContacts; ++i)
+      if (part != &down || !onStepEdge)
+        stepped.contacts[stepped.contactCount++] = part->contacts[i];
+  // Standing on the step's edge counts as standing on the step.
+  if (onStepEdge && stepped.contactCount < kMaxReportedContacts)
+    stepped.contacts[stepped.contactCount++] = {Vec3::UnitY(), true};
+  slide = stepped;
+}
+
 [[maybe_unused]] bool settingsInRange(const Body& body) {
   const MovementSettings& s = body.settings;
   return body.radii.xz > 0 && body.radii.y > 0 && s.gravity >= 0 && s.groundFriction >= 0 &&
          s.airFriction >= 0 && s.maxHorizontalSpeed > 0 && s.walkableSlopeDegrees >= 0 &&
          s.walkableSlopeDegrees <= 89 && s.maxIterations >= 1 && s.maxIterations <= 32 &&
-         s.restitution >= 0 && s.restitution <= 1 && s.skin > 0;
+         s.restitution >= 0 && s.restitution <= 1 && s.skin > 0 && s.maxStepHeight >= 0 &&
+         s.maxStepHeight <= 2 * body.radii.y;
 }
 
 }  // namespace
@@ -238,8 +298,15 @@ void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepS
   futureVelocity(body, force, dt);
   const Vec3 start = body.position;
   const float walkableY = walkableNormalY(body.settings);
-  const SlideResult slide = slideAgainstLevel(world, start, start + body.velocity * dt, body.radii,
-                                              body.settings, walkableY, scratch);
+  SlideResult slide = slideAgainstLevel(world, start, start + body.velocity * dt, body.radii,
+                                        body.settings, walkableY, scratch);
+  // A rounded body resting on a step's edge (not walkable ground, but
+  // support) may step on as well.
+  const bool onEdge =
+      std::any_of(slide.contacts.begin(), slide.contacts.begin() + slide.contactCount,
+                  [](const Contact& c) { return c.edge && c.normal.y() > 0; });
+  if (body.settings.maxStepHeight > 0 && (body.grounded || onEdge))
+    tryStepUp(world, body, start, start + body.velocity * dt, walkableY, scratch, slide);
   body.position = slide.end;
   respondToContacts(body, slide, dt);
   body.grounded = std::any_of(slide.contacts.begin(), slide.contacts.begin() + slide.contactCount,

@@ -58,6 +58,7 @@ inline bool insideGrownTriangle(const schema::TrianglePlanes& planes, const Vec3
 struct Impact {
   float time = std::numeric_limits<float>::infinity();  ///< fraction of the move, [0, 1]
   Vec3 normal = Vec3::Zero();  ///< unit, sphere space: from the contact point to the centre
+  bool edge = false;           ///< on an edge or a corner of the triangle, not its face
 };
 
 struct Triangle {

@@ -173,6 +173,51 @@ TEST_CASE("a body walks up a ramp", "[runtime][movement]") {
   REQUIRE(body.position.y() > 0.85f + std::tan(20 * std::numbers::pi_v<float> / 180) * 4);
 }
 
+TEST_CASE("with a step height a body walks up 0.3 m stairs, without one it is stopped",
+          "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  bspc::Mesh mesh = floorSlab();
+  for (int k = 0; k < 6; ++k)  // 0.3 m risers, 0.4 m treads, from x = 0
+    bspf::test::append(mesh, bspf::test::boxMesh({0.4 * k, 0, -2}, {15, 0.3 * (k + 1), 2}));
+  const Level level(mesh);
+  bspf::StepScratch scratch;
+  for (const float stepHeight : {0.0f, 0.35f}) {
+    INFO("step height " << stepHeight);
+    Body body = walker({-2, 0.851f, 0}, method);
+    body.settings.maxStepHeight = stepHeight;
+    run(level.world, body, Vec3(60, 0, 0), 120, scratch);  // about 11 m
+    if (stepHeight > 0) {
+      // On the top step (1.8 m), standing on it.
+      REQUIRE(body.position.y() == Approx(1.8f + 0.85f).margin(3e-3));
+      REQUIRE(body.position.x() > 2.4f);
+      REQUIRE(body.grounded);
+    } else {
+      REQUIRE(body.position.y() < 0.85f + 0.3f);
+      REQUIRE(body.position.x() < 0);
+    }
+  }
+}
+
+TEST_CASE("a step height never lets a body walk up a slope too steep to walk",
+          "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  bspc::Mesh mesh = floorSlab();
+  bspf::test::append(mesh, slope(50));
+  const Level level(mesh);
+  bspf::StepScratch scratch;
+  Body body = walker({0, 0.851f, -3}, method);
+  body.settings.maxStepHeight = 0.35f;
+  float highest = body.position.y();
+  for (int f = 0; f < 180; ++f) {
+    bspf::stepBody(level.world, body, Vec3(0, 0, 60), kDt, scratch);
+    highest = std::max(highest, body.position.y());
+  }
+  // One lift's worth at most, never up the slope.
+  REQUIRE(highest < 0.85f + 0.35f);
+}
+
 TEST_CASE("a body pushed into a 90 degree corner settles", "[runtime][movement]") {
   const bspf::CollisionMethod method = eachMethod();
   INFO("method " << nameOf(method));

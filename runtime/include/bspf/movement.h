@@ -17,7 +17,9 @@
 //      point where the centre crosses the triangle's offset plane; the hit
 //      with the lowest facing value moves the end out of it (slide), and the
 //      test starts again, up to MovementSettings::maxIterations slides; a
-//      move still blocked after that is refused (the body stays put);
+//      move still blocked after that is refused (the body stays put); a
+//      grounded body stopped by something steep may step up onto it
+//      (MovementSettings::maxStepHeight, off by default);
 //   3. contacts update the velocity (slide or bounce) and the ground state.
 // stepBodies then pushes overlapping bodies apart (grid broad phase), each
 // push itself a move against the level, so a push never enters a wall.
@@ -81,6 +83,13 @@ struct MovementSettings {
   /// so float rounding never starts the next step inside the surface's
   /// offset plane. > 0 and well under the radii. Default 0.001.
   float skin = 0.001f;
+  /// Highest ledge, metres, a grounded body steps up onto: when something
+  /// steep stops its horizontal move, the move is retried lifted by this much
+  /// and set down again, and kept if it lands on walkable ground further on
+  /// (stairs). 0 to 2 * radii.y. Default 0: off, as in the article. About
+  /// 0.35 suits a 1.7 m character on game stairs (docs/stability.md). Costs
+  /// three more slides, only in steps blocked while grounded.
+  float maxStepHeight = 0.0f;
 };
 
 /// A moving ellipsoid. Position and velocity are the body's state; the step
