@@ -3,6 +3,7 @@
 //
 //   walkers LEVEL.bspf [--spawns FILE] [--agents N] [--frames F] [--speed M_PER_S]
 //           [--seed K] [--dt S] [--radius-xz R] [--radius-y R] [--method planes|exact]
+//           [--step-height M]
 //           [--trace OUT.csv] [--json]
 //           [--brushes FILE]
 //
@@ -91,6 +92,9 @@ int main(int argc, char** argv) {
               {"planes", bspf::CollisionMethod::Planes},
               {"exact", bspf::CollisionMethod::ExactSweep}},
           CLI::ignore_case))
+      ->capture_default_str();
+  app.add_option("--step-height", options.stepHeight,
+                 "Highest ledge a walking agent steps up onto, m (0: off, as in the article)")
       ->capture_default_str();
   app.add_option("--trace", tracePath,
                  "Write 'frame,agent,x,y,z' (every centre after every frame) to this CSV");
@@ -216,9 +220,10 @@ int main(int argc, char** argv) {
         << ", \"agents\": " << options.agents << ", \"frames\": " << options.frames
         << ", \"speed\": " << options.speed << ", \"dt\": " << options.dt << ", \"method\": \""
         << (options.method == bspf::CollisionMethod::Planes ? "planes" : "exact") << "\""
-        << ", \"radius_xz\": " << options.radii.xz << ", \"radius_y\": " << options.radii.y
-        << ", \"seed\": " << options.seed << ", \"steps\": " << s.steps
-        << ", \"ns_per_step\": " << s.nsPerStep << ", \"refused_moves\": " << s.refusedMoves
+        << ", \"step_height\": " << options.stepHeight << ", \"radius_xz\": " << options.radii.xz
+        << ", \"radius_y\": " << options.radii.y << ", \"seed\": " << options.seed
+        << ", \"steps\": " << s.steps << ", \"ns_per_step\": " << s.nsPerStep
+        << ", \"refused_moves\": " << s.refusedMoves
         << ", \"iterations_mean\": " << s.iterationsMean
         << ", \"iterations_max\": " << s.iterationsMax
         << ", \"grounded_fraction\": " << s.groundedFraction

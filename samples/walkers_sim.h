@@ -45,6 +45,8 @@ struct Options {
   EllipsoidRadii radii{0.45f, 0.85f};
   /// Narrow phase: the article's planes (default) or the exact sweep.
   CollisionMethod method = CollisionMethod::Planes;
+  /// MovementSettings::maxStepHeight, metres: 0 (off) by default.
+  float stepHeight = 0.0f;
   std::uint64_t seed = 1;
 };
 
@@ -67,6 +69,8 @@ inline std::string validate(const Options& o) {
     return "--radius-xz must be > 0 and at most 100 m (got " + text(o.radii.xz) + ")";
   if (!positive(o.radii.y) || o.radii.y > 100)
     return "--radius-y must be > 0 and at most 100 m (got " + text(o.radii.y) + ")";
+  if (!std::isfinite(o.stepHeight) || o.stepHeight < 0 || o.stepHeight > 2 * o.radii.y)
+    return "--step-height must be 0 to twice --radius-y (got " + text(o.stepHeight) + ")";
   return {};
 }
 
@@ -347,6 +351,7 @@ class Simulation {
       body.position = starts[i];
       body.radii = options.radii;
       body.settings.method = options.method;
+      body.settings.maxStepHeight = options.stepHeight;
       body.settings.maxHorizontalSpeed = options.speed;
       agents_[i].rng = Random(streamSeed(options.seed, i + 1));
     }

@@ -248,6 +248,11 @@ TEST_CASE("walkers: spawn files, options, placement and determinism", "[samples]
     o = {};
     o.radii.y = 0;
     REQUIRE_THAT(bspf::walkers::validate(o), Catch::Contains("--radius-y"));
+    o = {};
+    o.stepHeight = -0.1f;
+    REQUIRE_THAT(bspf::walkers::validate(o), Catch::Contains("--step-height"));
+    o.stepHeight = 0.35f;
+    REQUIRE(bspf::walkers::validate(o).empty());
   }
   SECTION("placement on floor and determinism, on the arena") {
     const Level level = loadLevel(bspf::test::samplesDir(), "arena", dir);
