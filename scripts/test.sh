@@ -5,7 +5,9 @@
 # (its summary closes the output).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/install-deps.sh
+# With the benchmark packages, so the Bullet peer and the microbenchmarks are
+# built, and the sweep's smoke test runs, too.
+BSPF_WITH_BENCH=1 scripts/install-deps.sh
 jobs="$(nproc)"
 
 if [ "${BSPF_SKIP_SANITIZERS:-0}" != 1 ]; then
@@ -13,8 +15,8 @@ if [ "${BSPF_SKIP_SANITIZERS:-0}" != 1 ]; then
     -DCMAKE_CXX_FLAGS="-O1 -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer" \
     >/dev/null
   cmake --build build-asan -j"$jobs" --target bspf_tests
-  echo "sanitizer run: loader, query, clean, bad-input and movement tests"
-  build-asan/tests/bspf_tests "[loader],[query]~[shared-levels],[clean],[bad-input],[movement]"
+  echo "sanitizer run: loader, query, clean, bad-input, movement and stability tests"
+  build-asan/tests/bspf_tests "[loader],[query]~[shared-levels],[clean],[bad-input],[movement],[stability]"
 fi
 
 # Optimised, but with assert() live: tests check contracts too.
