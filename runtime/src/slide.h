@@ -11,7 +11,7 @@ namespace bspf {
 
 struct Contact {
   Vec3 normal;  ///< unit, world space, pointing out of the surface
-  bool walkable;
+  bool walkable = false;
   /// Met on a triangle's edge or corner, not its face (the exact sweep's
   /// rounded contacts; the planes method meets faces only).
   bool edge = false;
