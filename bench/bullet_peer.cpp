@@ -9,53 +9,15 @@
 #include <cmath>
 #include <numbers>
 
+#include "slide.h"     // runtime/src: SlideResult, Contact
+#include "velocity.h"  // runtime/src: the movement step's velocity model
+
 namespace bspf::bench {
 
 namespace {
 
 btVector3 toBt(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 Vec3 fromBt(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
-
-// The runtime's velocity model (runtime/src/movement.cpp, futureVelocity),
-// re-implemented with the same formulas: friction only when grounded, the
-// force in xz, the horizontal speed cap, then gravity.
-void futureVelocity(Body& body, const Vec3& force, float dt) {
-  const MovementSettings& s = body.settings;
-  Eigen::Vector2f horizontal(body.velocity.x(), body.velocity.z());
-  const float speed = horizontal.norm();
-  const float friction = body.grounded ? s.groundFriction : s.airFriction;
-  if (speed > 0) horizontal *= std::max(0.0f, speed - friction * dt) / speed;
-  horizontal += Eigen::Vector2f(force.x(), force.z()) * dt;
-  const float limited = horizontal.norm();
-  if (limited > s.maxHorizontalSpeed) horizontal *= s.maxHorizontalSpeed / limited;
-  body.velocity.x() = horizontal.x();
-  body.velocity.z() = horizontal.y();
-  body.velocity.y() -= s.gravity * dt;
-}
-
-struct PeerContact {
-  Vec3 normal;  // world space, unit
-  bool walkable;
-};
-
-// The runtime's respondToContacts with restitution 0: a walkable contact only
-// stops the fall; any other removes the velocity's component into it, a steep
-// upward-facing one along its levelled normal (so it stops a run like a wall).
-void respondToContacts(Body& body, const PeerContact* contacts, int count) {
-  for (int i = 0; i < count; ++i) {
-    Vec3 normal = contacts[i].normal;
-    if (!contacts[i].walkable && normal.y() > 0) {
-      const Vec3 level(normal.x(), 0, normal.z());
-      if (level.squaredNorm() > 1e-6f) normal = level.normalized();
-    }
-    const float into = body.velocity.dot(normal);
-    if (into >= 0) continue;
-    if (contacts[i].walkable)
-      body.velocity.y() = std::max(body.velocity.y(), 0.0f);
-    else
-      body.velocity -= into * normal;
-  }
-}
 
 }  // namespace
 
@@ -99,14 +61,13 @@ void BulletPeer::step(Body& body, const Vec3& force, float dt, int maxIterations
                       StepReport& report) const {
   const Impl& m = *impl_;
   report = StepReport{};
-  futureVelocity(body, force, dt);
+  detail::futureVelocity(body, force, dt);
   const Vec3 toSphere(1 / m.radii.xz, 1 / m.radii.y, 1 / m.radii.xz);
   const float walkableY =
       std::cos(body.settings.walkableSlopeDegrees * std::numbers::pi_v<float> / 180.0f);
   btVector3 position = toBt(body.position.cwiseProduct(toSphere));
   btVector3 target = position + toBt((body.velocity * dt).cwiseProduct(toSphere));
-  std::array<PeerContact, kMaxReportedContacts> contacts;
-  int contactCount = 0;
+  SlideResult slide;  // the contacts, in the runtime's own form
   btTransform from = btTransform::getIdentity(), to = btTransform::getIdentity();
   for (int iteration = 0;; ++iteration) {
     const btVector3 move = target - position;
@@ -134,16 +95,16 @@ void BulletPeer::step(Body& body, const Vec3& force, float dt, int maxIterations
     rest -= normal * rest.dot(normal);
     target = position + rest;
     ++report.iterations;
-    if (contactCount < kMaxReportedContacts)
-      contacts[contactCount++] = {worldNormal, worldNormal.y() >= walkableY};
+    if (slide.contactCount < kMaxReportedContacts)
+      slide.contacts[slide.contactCount++] = {worldNormal, worldNormal.y() >= walkableY};
   }
   body.position = fromBt(position).cwiseQuotient(toSphere);
-  respondToContacts(body, contacts.data(), contactCount);
-  body.grounded = std::any_of(contacts.begin(), contacts.begin() + contactCount,
-                              [](const PeerContact& c) { return c.walkable; });
+  detail::respondToContacts(body, slide, dt);
+  body.grounded = std::any_of(slide.contacts.begin(), slide.contacts.begin() + slide.contactCount,
+                              [](const Contact& c) { return c.walkable; });
   report.grounded = body.grounded;
-  report.contactCount = contactCount;
-  for (int i = 0; i < contactCount; ++i) report.contactNormals[i] = contacts[i].normal;
+  report.contactCount = slide.contactCount;
+  for (int i = 0; i < slide.contactCount; ++i) report.contactNormals[i] = slide.contacts[i].normal;
 }
 
 }  // namespace bspf::bench

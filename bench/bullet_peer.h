@@ -9,8 +9,8 @@
 // (ClosestConvexResultCallback), each advancing to the hit, backing off
 // `skin` metres along the hit normal and projecting the rest of the move onto
 // the hit plane; a move still blocked after that is refused (the body stays
-// at its last safe position). Contacts then update the velocity exactly as
-// the runtime's respondToContacts does with restitution 0.
+// at its last safe position). The velocity model is the runtime's own
+// (runtime/src/velocity.h), before and after the slides.
 //
 // Margins: the sphere's margin is its radius (Bullet models a sphere as a
 // point plus margin), so the sweep is exact for it; the mesh's margin is set
@@ -37,7 +37,7 @@ class BulletPeer {
   BulletPeer& operator=(const BulletPeer&) = delete;
 
   /// Advances `body` by `dt` (its settings' frictions, speed cap, gravity,
-  /// walkable slope and skin apply; restitution is taken as 0) with at most
+  /// walkable slope, skin and restitution apply, as in the runtime) with at most
   /// `maxIterations` slides. Fills `report`'s iterations, refused and grounded.
   void step(Body& body, const Vec3& force, float dt, int maxIterations, StepReport& report) const;
 

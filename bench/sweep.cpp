@@ -148,35 +148,20 @@ class Crowd {
       bodies_[i].position = starts[i];
       bodies_[i].radii = kRadii;
       bodies_[i].settings = settings;
-      agents_[i].rng = bspf::walkers::Random(bspf::walkers::streamSeed(seed, i + 1));
+      agents_[i] = bspf::walkers::RandomWalk(bspf::walkers::streamSeed(seed, i + 1));
     }
   }
 
   void steer(float dt) {
-    const float push = 10 * kSpeed;  // reaches the speed within 0.1 s
-    for (std::size_t i = 0; i < agents_.size(); ++i) {
-      Agent& agent = agents_[i];
-      if (agent.turnIn <= 0) {
-        const float angle = agent.rng.uniform(0, 2 * std::numbers::pi_v<float>);
-        agent.direction = Vec3(std::cos(angle), 0, std::sin(angle));
-        agent.turnIn = agent.rng.uniform(0.5f, 2.0f);
-      }
-      agent.turnIn -= dt;
-      forces_[i] = agent.direction * push;
-    }
+    for (std::size_t i = 0; i < agents_.size(); ++i) forces_[i] = agents_[i].nextForce(kSpeed, dt);
   }
 
   std::vector<Body>& bodies() { return bodies_; }
   const std::vector<Vec3>& forces() const { return forces_; }
 
  private:
-  struct Agent {
-    bspf::walkers::Random rng;
-    Vec3 direction = Vec3::Zero();
-    float turnIn = 0;
-  };
   std::vector<Body> bodies_;
-  std::vector<Agent> agents_;
+  std::vector<bspf::walkers::RandomWalk> agents_;
   std::vector<Vec3> forces_;
 };
 

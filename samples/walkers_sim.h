@@ -325,6 +325,31 @@ inline int countInsideSolid(const BrushSet& brushes, std::span<const Body> bodie
   return inside;
 }
 
+/// One agent's random walk: a new direction, uniformly random in the xz
+/// plane, every 0.5 to 2 s. Deterministic for its seed.
+class RandomWalk {
+ public:
+  explicit RandomWalk(std::uint64_t seed = 0) : rng_(seed) {}
+
+  /// The input force, m/s^2, for the next frame of `dt` seconds at walking
+  /// speed `speed` (m/s): 10 * speed along the current direction, which
+  /// reaches the speed within 0.1 s.
+  Vec3 nextForce(float speed, float dt) {
+    if (turnIn_ <= 0) {
+      const float angle = rng_.uniform(0, 2 * std::numbers::pi_v<float>);
+      direction_ = Vec3(std::cos(angle), 0, std::sin(angle));
+      turnIn_ = rng_.uniform(0.5f, 2.0f);
+    }
+    turnIn_ -= dt;
+    return direction_ * (10 * speed);
+  }
+
+ private:
+  Random rng_;
+  Vec3 direction_ = Vec3::Zero();
+  float turnIn_ = 0;  ///< seconds until the next turn
+};
+
 /// Figures of a run so far.
 struct Summary {
   long long steps = 0;          ///< agents * frames stepped
@@ -353,7 +378,7 @@ class Simulation {
       body.settings.method = options.method;
       body.settings.maxStepHeight = options.stepHeight;
       body.settings.maxHorizontalSpeed = options.speed;
-      agents_[i].rng = Random(streamSeed(options.seed, i + 1));
+      agents_[i] = RandomWalk(streamSeed(options.seed, i + 1));
     }
   }
 
@@ -363,17 +388,8 @@ class Simulation {
   /// the timed stepBodies call (for measurements from the same state).
   void step(
       const std::function<void(std::span<const Body>, std::span<const Vec3>)>& beforeStep = {}) {
-    const float push = 10 * options_.speed;  // reaches the speed within 0.1 s
-    for (std::size_t i = 0; i < agents_.size(); ++i) {
-      Agent& agent = agents_[i];
-      if (agent.turnIn <= 0) {
-        const float angle = agent.rng.uniform(0, 2 * std::numbers::pi_v<float>);
-        agent.direction = Vec3(std::cos(angle), 0, std::sin(angle));
-        agent.turnIn = agent.rng.uniform(0.5f, 2.0f);
-      }
-      agent.turnIn -= options_.dt;
-      forces_[i] = agent.direction * push;
-    }
+    for (std::size_t i = 0; i < agents_.size(); ++i)
+      forces_[i] = agents_[i].nextForce(options_.speed, options_.dt);
     if (beforeStep) beforeStep(bodies_, forces_);
     const auto start = std::chrono::steady_clock::now();
     stepBodies(*world_, bodies_, forces_, options_.dt, scratch_, reports_);
@@ -416,16 +432,10 @@ class Simulation {
   }
 
  private:
-  struct Agent {
-    Random rng;
-    Vec3 direction = Vec3::Zero();
-    float turnIn = 0;  ///< seconds until the next turn
-  };
-
   const World* world_;
   Options options_;
   std::vector<Body> bodies_;
-  std::vector<Agent> agents_;
+  std::vector<RandomWalk> agents_;
   std::vector<Vec3> forces_;
   std::vector<StepReport> reports_;
   StepScratch scratch_;

@@ -10,6 +10,7 @@
 
 #include "narrow_phase.h"
 #include "slide.h"
+#include "velocity.h"
 
 namespace bspf {
 
@@ -159,6 +160,10 @@ SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3&
              : slideWithPlanes(world, start, desiredEnd, radii, settings, walkableNormalY, scratch);
 }
 
+}  // namespace
+
+namespace detail {
+
 // Removes (slide) or reflects (bounce) the velocity's component into each
 // contact; a walkable contact stops the fall.
 void respondToContacts(Body& body, const SlideResult& slide, float dt) {
@@ -201,6 +206,10 @@ void futureVelocity(Body& body, const Vec3& force, float dt) {
   body.velocity.z() = horizontal.y();
   body.velocity.y() -= s.gravity * dt;
 }
+
+}  // namespace detail
+
+namespace {
 
 float walkableNormalY(const MovementSettings& s) {
   return std::cos(s.walkableSlopeDegrees * std::numbers::pi_v<float> / 180.0f);
@@ -295,7 +304,7 @@ void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepS
   assert(settingsInRange(body));
   if (report) *report = StepReport{};
 
-  futureVelocity(body, force, dt);
+  detail::futureVelocity(body, force, dt);
   const Vec3 start = body.position;
   const float walkableY = walkableNormalY(body.settings);
   SlideResult slide = slideAgainstLevel(world, start, start + body.velocity * dt, body.radii,
@@ -308,7 +317,7 @@ void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepS
   if (body.settings.maxStepHeight > 0 && (body.grounded || onEdge))
     tryStepUp(world, body, start, start + body.velocity * dt, walkableY, scratch, slide);
   body.position = slide.end;
-  respondToContacts(body, slide, dt);
+  detail::respondToContacts(body, slide, dt);
   body.grounded = std::any_of(slide.contacts.begin(), slide.contacts.begin() + slide.contactCount,
                               [](const Contact& c) { return c.walkable; });
   if (report) {
