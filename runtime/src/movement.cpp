@@ -271,7 +271,11 @@ void tryStepUp(const World& world, const Body& body, const Vec3& start, const Ve
       std::any_of(down.contacts.begin(), down.contacts.begin() + down.contactCount,
                   [](const Contact& c) { return c.edge && c.normal.y() > 0; });
   if (!walkable(down) && !onStepEdge) return;
+  // Never higher than the step height: a walkable response on the way down
+  // (the planes method lifts a body onto a surface it reaches) could
+  // otherwise carry it onto a ledge above the lift.
   if (up.refused || over.refused || down.refused ||
+      down.end.y() > start.y() + s.maxStepHeight + s.skin ||
       horizontalProgress(start, down.end, move) <= plainProgress + 1e-4f)
     return;
   SlideResult stepped = down;
@@ -393,21 +397,25 @@ void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3
             if (overlap <= 0) continue;
             // Each moves half the overlap away from the other, as a move
             // against the level (no gravity): a push never enters a wall.
+            // Pushes are horizontal. Along the line between centres, a body
+            // squeezed against a wall by a crowd was ratcheted upwards a
+            // little every frame, until it stood on the wall's top and
+            // walked out of the level; a body dropped onto another slides
+            // off it instead of standing on its head.
+            Vec3 level(apart.x(), 0, apart.z());
+            level = level.squaredNorm() > 1e-12f ? Vec3(level.normalized()) : Vec3::UnitX();
             const float half = 0.5f * overlap + 0.5f * a.settings.skin;
             for (auto [body, sign, index] : {std::tuple{&a, 1.0f, i}, std::tuple{&b, -1.0f, j}}) {
               const SlideResult push = slideAgainstLevel(
-                  world, body->position, body->position + sign * half * apart, body->radii,
+                  world, body->position, body->position + sign * half * level, body->radii,
                   body->settings, walkableNormalY(body->settings), scratch);
               body->position = push.end;
               // Only the horizontal closing speed is removed: removing it
               // along a tilted line between centres would turn a fast
               // body's run into a jump over the other's shoulder.
-              Vec3 away(sign * apart.x(), 0, sign * apart.z());
-              if (away.squaredNorm() > 1e-8f) {
-                away.normalize();
-                const float closing = body->velocity.dot(away);
-                if (closing < 0) body->velocity -= closing * away;
-              }
+              const Vec3 away = sign * level;
+              const float closing = body->velocity.dot(away);
+              if (closing < 0) body->velocity -= closing * away;
               if (StepReport* r = reportOf(index)) {
                 record(r, push, false);
                 ++r->bodyContacts;

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "support/test_support.h"
 
@@ -237,6 +238,38 @@ TEST_CASE("a body pushed into a 90 degree corner settles", "[runtime][movement]"
   }
   REQUIRE(body.position.x() == Approx(5 - 0.45f).margin(3e-3));
   REQUIRE(body.position.z() == Approx(5 - 0.45f).margin(3e-3));
+}
+
+TEST_CASE("a crowd squeezing bodies into a corner never lifts one onto a low wall",
+          "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  // A corner of 1.2 m walls (faces x = 5 and z = 5).
+  bspc::Mesh mesh = floorSlab();
+  bspf::test::append(mesh, bspf::test::boxMesh({5, 0, -20}, {6, 1.2, 6}));
+  bspf::test::append(mesh, bspf::test::boxMesh({-20, 0, 5}, {5, 1.2, 6}));
+  const Level level(mesh);
+  bspf::StepScratch scratch;
+  // 16 bodies packed tight, some dropped a little onto others (every centre
+  // below the walls' top), all pushing into the corner.
+  std::vector<Body> bodies;
+  for (int i = 0; i < 16; ++i)
+    bodies.push_back(walker(
+        {4.5f - 0.6f * float(i % 4), 0.86f + 0.14f * float(i % 3), 4.5f - 0.6f * float(i / 4)},
+        method));
+  const std::vector<Vec3> forces(bodies.size(), Vec3(40, 0, 40));
+  float highest = 0;
+  for (int f = 0; f < 600; ++f) {
+    bspf::stepBodies(level.world, bodies, forces, kDt, scratch);
+    for (const Body& b : bodies) highest = std::max(highest, b.position.y());
+  }
+  // No centre ever rose above the walls' top; all end on the floor, in the room.
+  REQUIRE(highest < 1.2f);
+  for (const Body& b : bodies) {
+    REQUIRE(b.position.y() == Approx(0.85f).margin(3e-3));
+    REQUIRE(b.position.x() <= 5 - 0.45f + 2e-3f);
+    REQUIRE(b.position.z() <= 5 - 0.45f + 2e-3f);
+  }
 }
 
 TEST_CASE("two bodies pushed together end apart and neither inside a wall", "[runtime][movement]") {

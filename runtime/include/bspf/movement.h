@@ -21,8 +21,9 @@
 //      grounded body stopped by something steep may step up onto it
 //      (MovementSettings::maxStepHeight, off by default);
 //   3. contacts update the velocity (slide or bounce) and the ground state.
-// stepBodies then pushes overlapping bodies apart (grid broad phase), each
-// push itself a move against the level, so a push never enters a wall.
+// stepBodies then pushes overlapping bodies apart, horizontally (grid broad
+// phase), each push itself a move against the level, so a push never enters
+// a wall.
 //
 // Thread safety: the World is only read. Scratch is the caller's: use one
 // StepScratch per thread; bodies stepped on different threads must differ.
@@ -147,8 +148,10 @@ void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepS
 
 /// Advances every body by `dt`: each against the level (as stepBody, in
 /// order), then overlapping bodies are pushed apart, each by half the
-/// overlap along the line between centres, away from the other; a push is
-/// a move against the level, so it never ends inside a wall. The broad
+/// overlap (measured along the line between centres) horizontally away from
+/// the other; a push is a move against the level, so it never ends inside a
+/// wall. Pushes are horizontal so that a crowd never lifts a body (onto a
+/// wall's top, say): bodies do not stand on each other's heads. The broad
 /// phase is a uniform grid: cost about linear in the number of bodies.
 /// `forces` is parallel to `bodies`; `reports` is empty or parallel too.
 void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3> forces, float dt,
