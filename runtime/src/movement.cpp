@@ -315,10 +315,11 @@ void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepS
                                         body.settings, walkableY, scratch);
   // A rounded body resting on a step's edge (not walkable ground, but
   // support) may step on as well.
-  const bool onEdge =
-      std::any_of(slide.contacts.begin(), slide.contacts.begin() + slide.contactCount,
-                  [](const Contact& c) { return c.edge && c.normal.y() > 0; });
-  if (body.settings.maxStepHeight > 0 && (body.grounded || onEdge))
+  auto onEdge = [&slide] {
+    return std::any_of(slide.contacts.begin(), slide.contacts.begin() + slide.contactCount,
+                       [](const Contact& c) { return c.edge && c.normal.y() > 0; });
+  };
+  if (body.settings.maxStepHeight > 0 && (body.grounded || onEdge()))
     tryStepUp(world, body, start, start + body.velocity * dt, walkableY, scratch, slide);
   body.position = slide.end;
   detail::respondToContacts(body, slide, dt);
