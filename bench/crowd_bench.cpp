@@ -16,13 +16,7 @@
 
 int main() {
   // A 400 m square floor slab, compiled in memory.
-  const std::vector<std::uint8_t> blob = bspf::bench::floorBlob(200.0);
-  const bspf::OpenResult opened =
-      bspf::viewWorld({reinterpret_cast<const std::byte*>(blob.data()), blob.size()});
-  if (!opened) {
-    std::fprintf(stderr, "bspf_crowd_bench: %s\n", opened.message.c_str());
-    return 1;
-  }
+  const bspf::bench::CompiledLevel floor(bspf::bench::floorMesh(200.0), {}, "floor");
   for (const int side : {8, 16, 32, 64, 128}) {
     const int n = side * side;
     std::vector<bspf::Body> bodies(n);
@@ -39,7 +33,7 @@ int main() {
     double contacts = 0;
     for (int frame = 0; frame < 120; ++frame) {
       const auto start = std::chrono::steady_clock::now();
-      bspf::stepBodies(opened.world.value(), bodies, forces, 1.0f / 60, scratch, reports);
+      bspf::stepBodies(floor.world(), bodies, forces, 1.0f / 60, scratch, reports);
       const auto stop = std::chrono::steady_clock::now();
       nsPerBody.push_back(std::chrono::duration<double, std::nano>(stop - start).count() / n);
       for (const auto& r : reports) contacts += r.bodyContacts;

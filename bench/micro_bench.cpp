@@ -35,6 +35,7 @@
 #include <vector>
 
 #include "narrow_phase.h"
+#include "support/mesh_blob.h"
 #include "walkers_sim.h"
 
 namespace {
@@ -76,8 +77,8 @@ struct Move {
 
 struct Level {
   std::string name;
-  std::vector<std::uint8_t> blob;
-  std::optional<World> world;
+  std::optional<bspf::bench::CompiledLevel> compiled;
+  const World& world() const { return compiled->world(); }
   std::vector<BodyState> planesStates, exactStates;
   std::vector<Move> moves;
   std::vector<PreCheckInput> preChecks;
@@ -122,7 +123,7 @@ Move desiredMove(const BodyState& s) {
 // The inputs each primitive meets in the first slide iteration of each
 // state's move.
 void gatherInputs(Level& level) {
-  const World& world = *level.world;
+  const World& world = level.world();
   bspf::SweepScratch scratch;
   std::vector<std::uint32_t> candidates;
   for (const BodyState& s : level.planesStates) {
@@ -177,24 +178,19 @@ std::unique_ptr<Level> loadLevel(const std::filesystem::path& base) {
   level->name = base.filename().string();
   try {
     bspc::CompileSettings settings;
-    bspc::CompileReport report;
-    const bspc::Mesh mesh = bspc::importMesh(base.string() + ".obj", settings.import);
-    level->blob = bspc::compileMesh(mesh, settings, level->name, report);
+    level->compiled.emplace(bspc::importMesh(base.string() + ".obj", settings.import), settings,
+                            level->name);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bspf_micro_bench: %s\n", e.what());
     return nullptr;
   }
-  bspf::OpenResult opened =
-      bspf::viewWorld({reinterpret_cast<const std::byte*>(level->blob.data()), level->blob.size()});
   const bspf::walkers::Points spawns = bspf::walkers::loadSpawns(base.string() + ".spawns.txt");
-  if (!opened || !spawns) {
-    std::fprintf(stderr, "bspf_micro_bench: %s\n",
-                 !opened ? opened.message.c_str() : spawns.error.c_str());
+  if (!spawns) {
+    std::fprintf(stderr, "bspf_micro_bench: %s\n", spawns.error.c_str());
     return nullptr;
   }
-  level->world = std::move(opened.world);
-  level->planesStates = crowdStates(*level->world, spawns.points, CollisionMethod::Planes);
-  level->exactStates = crowdStates(*level->world, spawns.points, CollisionMethod::ExactSweep);
+  level->planesStates = crowdStates(level->world(), spawns.points, CollisionMethod::Planes);
+  level->exactStates = crowdStates(level->world(), spawns.points, CollisionMethod::ExactSweep);
   gatherInputs(*level);
   return level;
 }
@@ -243,8 +239,9 @@ void exactPerTriangle(benchmark::State& state, const Level& level) {
   cycle(state, level.sweeps, [&](const SweepInput& x) {
     bspf::detail::Impact impact;
     bool penetrating = false;
-    bspf::detail::earliestImpact(bspf::detail::sphereSpaceTriangle(*level.world, x.index, toSphere),
-                                 x.p, x.v, impact, penetrating);
+    bspf::detail::earliestImpact(
+        bspf::detail::sphereSpaceTriangle(level.world(), x.index, toSphere), x.p, x.v, impact,
+        penetrating);
     benchmark::DoNotOptimize(impact);
     benchmark::DoNotOptimize(penetrating);
   });
@@ -255,7 +252,7 @@ void candidateTriangles(benchmark::State& state, const Level& level) {
   std::vector<std::uint32_t> candidates;
   std::size_t total = 0;
   cycle(state, level.moves, [&](const Move& m) {
-    collectCandidateTriangles(*level.world, m.from, m.to, kRadii, scratch, candidates);
+    collectCandidateTriangles(level.world(), m.from, m.to, kRadii, scratch, candidates);
     benchmark::DoNotOptimize(candidates.data());
     benchmark::ClobberMemory();
     total += candidates.size();
@@ -268,7 +265,7 @@ void stepBody(benchmark::State& state, const Level& level, CollisionMethod metho
   cycle(state, method == CollisionMethod::Planes ? level.planesStates : level.exactStates,
         [&](const BodyState& s) {
           Body body = s.body;
-          bspf::stepBody(*level.world, body, s.force, kDt, scratch);
+          bspf::stepBody(level.world(), body, s.force, kDt, scratch);
           benchmark::DoNotOptimize(body.position);
         });
 }

@@ -38,6 +38,7 @@
 #include <vector>
 
 #include "oracle.h"
+#include "support/mesh_blob.h"
 #include "walkers_sim.h"
 
 #ifdef BSPF_HAVE_BULLET
@@ -115,23 +116,11 @@ struct Level {
   bspf::walkers::BrushSet brushes;
 };
 
-// A level compiled with one leaf size; the World views `blob`.
-struct Compiled {
-  std::vector<std::uint8_t> blob;
-  std::optional<bspf::World> world;
-};
-
-Compiled compile(const Level& level, std::uint32_t leaf) {
+// The level compiled with one leaf size.
+bspf::bench::CompiledLevel compile(const Level& level, std::uint32_t leaf) {
   bspc::CompileSettings settings;
   settings.tree.maxLeafTriangles = leaf;
-  bspc::CompileReport report;
-  Compiled c;
-  c.blob = bspc::compileMesh(level.mesh, settings, level.obj.filename().string(), report);
-  bspf::OpenResult opened =
-      bspf::viewWorld({reinterpret_cast<const std::byte*>(c.blob.data()), c.blob.size()});
-  if (!opened) throw std::runtime_error(level.name + ": " + opened.message);
-  c.world = *opened.world;
-  return c;
+  return {level.mesh, settings, level.obj.filename().string()};
 }
 
 // Steps every body of one frame; only this is timed.
@@ -346,17 +335,17 @@ int main(int argc, char** argv) {
     for (const fs::path& obj : objs) {
       const Level level = loadLevel(obj);
       const std::vector<Vec3> starts = bspf::walkers::startsFromSpawns(level.spawns, agents);
-      std::map<std::uint32_t, Compiled> compiled;
+      std::map<std::uint32_t, bspf::bench::CompiledLevel> compiled;
       for (const Config& c : configs)
         if (!compiled.count(c.leaf)) compiled.emplace(c.leaf, compile(level, c.leaf));
 #ifdef BSPF_HAVE_BULLET
-      const bspf::bench::BulletPeer peer(*compiled.at(kDefaultLeaf).world, kRadii);
+      const bspf::bench::BulletPeer peer(compiled.at(kDefaultLeaf).world(), kRadii);
 #endif
       bspf::StepScratch scratch;
       std::vector<RunInput> inputs;
       std::vector<FrameStepper> steppers;
       for (const Config& c : configs) {
-        const bspf::World* world = &*compiled.at(c.leaf).world;
+        const bspf::World* world = &compiled.at(c.leaf).world();
         const int runFrames = std::max(1, int(std::lround(frames * kDefaultDt / c.dt)));
         inputs.push_back({*world, level, c, starts, runFrames, seed});
         steppers.push_back([world, &scratch](std::span<Body> bodies, std::span<const Vec3> forces,

@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "oracle.h"
+#include "support/mesh_blob.h"
 
 namespace bspf::stability {
 
@@ -534,23 +535,6 @@ Scene packedRoom() {
   return s;
 }
 
-// 8-byte aligned bytes of a compiled level, and the World viewing them.
-struct CompiledLevel {
-  std::vector<std::uint64_t> storage;
-  std::optional<World> world;
-
-  explicit CompiledLevel(const bspc::Mesh& mesh) {
-    bspc::CompileReport report;
-    const std::vector<std::uint8_t> bytes = bspc::compileMesh(mesh, {}, "scene", report);
-    storage.resize(bytes.size() / 8 + 1);
-    std::memcpy(storage.data(), bytes.data(), bytes.size());
-    OpenResult opened =
-        viewWorld({reinterpret_cast<const std::byte*>(storage.data()), bytes.size()});
-    if (!opened) throw std::runtime_error("stability scene: " + opened.message);
-    world = std::move(opened.world);
-  }
-};
-
 struct RunFigures {
   Trajectory trajectory;
   std::vector<double> penetration;
@@ -622,8 +606,8 @@ CaseResult runScene(const Scene& scene, CollisionMethod method, const Tolerances
   CaseResult result;
   result.scene = scene.name;
   result.method = method;
-  const CompiledLevel level(scene.level);
-  RunFigures run = simulate(*level.world, scene, method, Vec3::Zero(), true);
+  const bench::CompiledLevel level(scene.level, {}, scene.name);
+  RunFigures run = simulate(level.world(), scene, method, Vec3::Zero(), true);
   result.penetrationMax = *std::max_element(run.penetration.begin(), run.penetration.end());
   result.penetrationP99 = oracle::quantile(run.penetration, 0.99);
   result.insideSolid = run.insideSolid;
@@ -633,9 +617,9 @@ CaseResult runScene(const Scene& scene, CollisionMethod method, const Tolerances
     result.jitter =
         std::max(result.jitter, lineFitResidual(run.trajectory, b, run.trajectory.size() - 30));
   if (scene.referenceLevel) {
-    const CompiledLevel reference(*scene.referenceLevel);
+    const bench::CompiledLevel reference(*scene.referenceLevel, {}, scene.name);
     const RunFigures referenceRun =
-        simulate(*reference.world, scene, method, scene.referenceOffset, false);
+        simulate(reference.world(), scene, method, scene.referenceOffset, false);
     result.goal = scene.checkGoal(run.trajectory, &referenceRun.trajectory);
   } else {
     result.goal = scene.checkGoal(run.trajectory, nullptr);
