@@ -6,6 +6,8 @@
 #include <bspf/movement.h>
 
 #include <array>
+#include <cmath>
+#include <numbers>
 
 namespace bspf {
 
@@ -34,5 +36,20 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
 SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desiredEnd,
                        EllipsoidRadii radii, const MovementSettings& settings,
                        float walkableNormalY, StepScratch& scratch);
+
+/// The narrow phase `settings.method` names.
+SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,
+                              EllipsoidRadii radii, const MovementSettings& settings,
+                              float walkableNormalY, StepScratch& scratch);
+
+/// The least normal y of a walkable contact: cos(walkableSlopeDegrees).
+inline float walkableNormalY(const MovementSettings& s) {
+  return std::cos(s.walkableSlopeDegrees * std::numbers::pi_v<float> / 180.0f);
+}
+
+/// Adds a slide's figures to `report` (if any). Pushes between bodies add
+/// their contacts but not their iterations or refusals: those describe the
+/// body's own move.
+void recordSlide(StepReport* report, const SlideResult& slide, bool ownMove);
 
 }  // namespace bspf

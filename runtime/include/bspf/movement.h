@@ -124,6 +124,11 @@ struct StepReport {
   int bodyContacts = 0;
 };
 
+class StepScratch;
+namespace detail {
+void pushBodiesApart(const World&, std::span<Body>, StepScratch&, std::span<StepReport>);
+}
+
 /// Per-thread scratch for the step. Reusable across worlds and frames; it
 /// allocates only while growing.
 class StepScratch {
@@ -132,8 +137,8 @@ class StepScratch {
   std::vector<std::uint32_t> candidates;
 
  private:
-  friend void stepBodies(const World&, std::span<Body>, std::span<const Vec3>, float, StepScratch&,
-                         std::span<StepReport>);
+  friend void detail::pushBodiesApart(const World&, std::span<Body>, StepScratch&,
+                                      std::span<StepReport>);
   std::vector<std::uint64_t> cellKeys_;
   std::vector<std::uint32_t> order_;
 };

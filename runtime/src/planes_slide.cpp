@@ -1,0 +1,149 @@
+// CollisionMethod::Planes: the article's six-plane narrow phase and its
+// slide, with the defects fixed that docs/algorithm.md lists.
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include "narrow_phase.h"
+#include "slide.h"
+
+namespace bspf {
+
+namespace {
+
+struct Hit {
+  std::uint32_t triangle;
+  float facing;
+};
+
+// The triangle in the way of the move start -> end with the lowest facing
+// value, if any.
+std::optional<Hit> findBlockingTriangle(const World& world, const Vec3& start, const Vec3& end,
+                                        EllipsoidRadii radii,
+                                        std::span<const std::uint32_t> candidates) {
+  const Vec3 move = end - start;
+  const float moveLength = move.norm();
+  const Vec3 direction = moveLength > 0 ? Vec3(move / moveLength) : Vec3::Zero();
+  std::optional<Hit> best;
+  for (const std::uint32_t t : candidates) {
+    const schema::TrianglePlanes& planes = world.trianglePlanes()[t];
+    const schema::Plane& face = planes.face();
+    const detail::SideValues sides = detail::sideValues(face, start, end, radii);
+    if (!detail::passesPreCheck(sides)) continue;
+    const auto [reach, startSide, endSide] = sides;
+    // Test the six planes where the centre crosses the offset plane (the
+    // article leaves this position unspecified: testing the end lets fast
+    // bodies skip small triangles). A body already within it is tested at
+    // its start and at its end.
+    bool inside;
+    if (startSide >= reach) {
+      const float t = (startSide - reach) / (startSide - endSide);
+      inside = detail::insideGrownTriangle(planes, start + t * move, radii);
+    } else {
+      inside = detail::insideGrownTriangle(planes, start, radii) ||
+               detail::insideGrownTriangle(planes, end, radii);
+    }
+    if (!inside) continue;
+    const float facing = toVec3(face.normal()).dot(direction);
+    if (!best || facing < best->facing || (facing == best->facing && t < best->triangle))
+      best = Hit{t, facing};
+  }
+  return best;
+}
+
+// A surface the end was moved out of this step: the end must keep
+// dot(normal, end) >= target, and is moved along `push` to get there.
+struct Constraint {
+  Vec3 normal;
+  float target;
+  Vec3 push;
+};
+
+float violation(const Constraint& c, const Vec3& end) { return c.target - c.normal.dot(end); }
+
+// Moves `end` along the push directions of `set` (2 or 3 constraints) so it
+// lies on all of them at once: the crease or corner they form. Returns false
+// (and leaves `end`) when they are too close to parallel to meet, or when
+// meeting them would pull the end into any of them.
+template <int N>
+bool meetConstraints(const std::array<const Constraint*, N>& set, float maxShift, Vec3& end) {
+  Eigen::Matrix<float, N, N> m;
+  Eigen::Matrix<float, N, 1> need;
+  for (int r = 0; r < N; ++r) {
+    for (int c = 0; c < N; ++c) m(r, c) = set[r]->normal.dot(set[c]->push);
+    need(r) = violation(*set[r], end);
+  }
+  const Eigen::FullPivLU<Eigen::Matrix<float, N, N>> lu(m);
+  if (!lu.isInvertible() || std::abs(lu.determinant()) < 1e-3f) return false;
+  const Eigen::Matrix<float, N, 1> amount = lu.solve(need);
+  if ((amount.array() < -1e-4f).any()) return false;
+  Vec3 shift = Vec3::Zero();
+  for (int c = 0; c < N; ++c) shift += amount(c) * set[c]->push;
+  // Nearly parallel surfaces meet far away: going there would teleport the
+  // body. Such a crease is left to the ordinary slides.
+  if (!(shift.norm() <= maxShift)) return false;
+  end += shift;
+  return true;
+}
+
+// Moves the end out of blocking triangles until none blocks, or refuses the
+// move after maxIterations slides. Walkable contacts push the end straight
+// up rather than along the normal, so a body standing on a slope does not
+// creep down it. When moving out of one surface puts the end back into a
+// surface of an earlier slide (a crease, or a corner of three), the end goes
+// to where they meet at once instead of bouncing between them, which would
+// use up the iterations and refuse the move.
+}  // namespace
+
+SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& desiredEnd,
+                            EllipsoidRadii radii, const MovementSettings& settings,
+                            float walkableNormalY, StepScratch& scratch) {
+  SlideResult result;
+  result.end = desiredEnd;
+  std::array<Constraint, kMaxReportedContacts> constraints;
+  int constraintCount = 0;
+  // A crease solution may move the end at most this far: a frame's travel
+  // plus the body's size.
+  const float maxShift = (desiredEnd - start).norm() + std::max(radii.xz, radii.y);
+  for (int iteration = 0;; ++iteration) {
+    collectCandidateTriangles(world, start, result.end, radii, scratch.sweep, scratch.candidates);
+    const std::optional<Hit> hit =
+        findBlockingTriangle(world, start, result.end, radii, scratch.candidates);
+    if (!hit) return result;
+    if (iteration == settings.maxIterations) {
+      result.refused = true;
+      result.end = start;
+      return result;
+    }
+    const schema::Plane& face = world.trianglePlanes()[hit->triangle].face();
+    const Vec3 normal = toVec3(face.normal());
+    const bool walkable = normal.y() >= walkableNormalY;
+    const Constraint added{normal, face.distance() + effectiveRadius(normal, radii) + settings.skin,
+                           walkable ? Vec3::UnitY() : normal};
+    result.end += added.push * (violation(added, result.end) / normal.dot(added.push));
+
+    // The most recent earlier surfaces the end is back inside, if any.
+    const Constraint* back[2] = {nullptr, nullptr};
+    for (int i = constraintCount - 1; i >= 0 && !back[1]; --i) {
+      if (violation(constraints[i], result.end) <= 1e-5f) continue;
+      if (constraints[i].normal.dot(normal) > 0.9999f) continue;  // the same surface
+      (back[0] ? back[1] : back[0]) = &constraints[i];
+    }
+    if (back[0]) {
+      Vec3 meet = result.end;
+      if (meetConstraints<2>({&added, back[0]}, maxShift, meet)) {
+        result.end = meet;
+        if (back[1] && violation(*back[1], meet) > 1e-5f &&
+            meetConstraints<3>({&added, back[0], back[1]}, maxShift, meet))
+          result.end = meet;
+      }
+    }
+    if (constraintCount < kMaxReportedContacts) constraints[constraintCount++] = added;
+    ++result.iterations;
+    if (result.contactCount < kMaxReportedContacts)
+      result.contacts[result.contactCount++] = {normal, walkable};
+  }
+}
+
+}  // namespace bspf
