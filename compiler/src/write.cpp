@@ -1,6 +1,5 @@
 #include <bspc/write.h>
 #include <bspf/world.h>
-
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -45,33 +44,45 @@ std::vector<std::uint8_t> serializeWorld(const Mesh& mesh,
   triangles.reserve(mesh.triangles.size());
   for (const auto& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
 
+  std::vector<fb::Box> leafBounds;
+  leafBounds.reserve(tree.leafTriangles.size());
+  for (const std::uint32_t t : tree.leafTriangles) {
+    // From the float vertices the runtime reads, so the box holds them exactly.
+    Eigen::Vector3f boxLow = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+    Eigen::Vector3f boxHigh = -boxLow;
+    for (const std::uint32_t v : mesh.triangles[t]) {
+      const Eigen::Vector3f f = mesh.vertices[v].cast<float>();
+      boxLow = boxLow.cwiseMin(f);
+      boxHigh = boxHigh.cwiseMax(f);
+    }
+    leafBounds.emplace_back(fb::Vec3(boxLow.x(), boxLow.y(), boxLow.z()),
+                            fb::Vec3(boxHigh.x(), boxHigh.y(), boxHigh.z()));
+  }
   flatbuffers::FlatBufferBuilder fbb(1024 + mesh.triangles.size() * 160);
   fbb.ForceDefaults(true);
   const CleanReport& clean = metadata.clean;
   const auto build = fb::CreateBuildInfo(
       fbb, fbb.CreateString("bspc " BSPF_VERSION),
-      fbb.CreateString(describeOptions(metadata.settings)),
-      fbb.CreateString(metadata.sourceFile), toSchema(metadata.settings.import.up),
-      static_cast<float>(metadata.settings.import.scale), clean.inputTriangles,
-      clean.inputVertices, clean.weldedVertices, clean.droppedDegenerate, clean.droppedZeroArea,
-      clean.droppedDuplicate, metadata.settings.tree.maxLeafTriangles,
+      fbb.CreateString(describeOptions(metadata.settings)), fbb.CreateString(metadata.sourceFile),
+      toSchema(metadata.settings.import.up), static_cast<float>(metadata.settings.import.scale),
+      clean.inputTriangles, clean.inputVertices, clean.weldedVertices, clean.droppedDegenerate,
+      clean.droppedZeroArea, clean.droppedDuplicate, metadata.settings.tree.maxLeafTriangles,
       metadata.settings.tree.maxDepth);
   const fb::Vec3 boundsMin(low.x(), low.y(), low.z());
   const fb::Vec3 boundsMax(high.x(), high.y(), high.z());
-  const auto world = fb::CreateWorld(
-      fbb, bspf::kFormatVersion, 1.0f, fb::UpAxis::Y, &boundsMin, &boundsMax, build,
-      fbb.CreateVectorOfStructs(vertices), fbb.CreateVectorOfStructs(triangles),
-      fbb.CreateVectorOfStructs(planes), fbb.CreateVectorOfStructs(tree.nodes),
-      fbb.CreateVectorOfStructs(tree.leaves), fbb.CreateVector(tree.leafTriangles), tree.root,
-      tree.depth);
+  const auto world =
+      fb::CreateWorld(fbb, bspf::kFormatVersion, 1.0f, fb::UpAxis::Y, &boundsMin, &boundsMax, build,
+                      fbb.CreateVectorOfStructs(vertices), fbb.CreateVectorOfStructs(triangles),
+                      fbb.CreateVectorOfStructs(planes), fbb.CreateVectorOfStructs(tree.nodes),
+                      fbb.CreateVectorOfStructs(tree.leaves), fbb.CreateVector(tree.leafTriangles),
+                      tree.root, tree.depth, fbb.CreateVectorOfStructs(leafBounds));
   fbb.FinishSizePrefixed(world, bspf::kFileIdentifier);
   return {fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()};
 }
 
 void writeFileAtomically(const std::filesystem::path& path, std::span<const std::uint8_t> bytes) {
   const std::filesystem::path temporary =
-      path.parent_path() /
-      ("." + path.filename().string() + ".tmp-" + std::to_string(::getpid()));
+      path.parent_path() / ("." + path.filename().string() + ".tmp-" + std::to_string(::getpid()));
   auto fail = [&](const std::string& why) {
     ::unlink(temporary.c_str());
     throw CompileError("cannot write " + path.string() + ": " + why);

@@ -48,27 +48,135 @@ std::uint32_t locateLeaf(const World& world, const Vec3& p) {
   return static_cast<std::uint32_t>(-(ref + 1));
 }
 
+void collectBoxLeaves(const World& world, const Vec3& low, const Vec3& high,
+                      std::vector<std::uint32_t>& leavesOut) {
+  assert((low.array() <= high.array()).all());
+  const std::span<const schema::Node> nodes = world.nodes();
+  const Vec3 centre = 0.5f * (low + high);
+  const Vec3 half = 0.5f * (high - low);
+  std::array<std::int32_t, kMaxTreeDepth + 2> stack;
+  std::size_t top = 0;
+  stack[top++] = world.root();
+  while (top > 0) {
+    const std::int32_t ref = stack[--top];
+    if (ref < 0) {
+      leavesOut.push_back(static_cast<std::uint32_t>(-(ref + 1)));
+      continue;
+    }
+    const schema::Node& node = nodes[ref];
+    const schema::Plane& split = node.split();
+    const schema::Vec3& n = split.normal();
+    // The box's extent along the normal: its support function.
+    const float reach = std::abs(n.x()) * half.x() + std::abs(n.y()) * half.y() +
+                        std::abs(n.z()) * half.z() + kSweepMarginMetres +
+                        std::abs(split.distance()) * 4e-7f;
+    const float side = signedDistance(split, centre);
+    // The centre's side always overlaps the box; the far side when the
+    // plane passes within the box's reach.
+    const bool inFront = side >= 0;
+    if (std::abs(side) < reach) stack[top++] = inFront ? node.back() : node.front();
+    stack[top++] = inFront ? node.front() : node.back();
+  }
+}
+
+// Lists each triangle of the current query's leaves (scratch.leaves) once:
+// a generation stamp per triangle, so starting a query costs nothing.
+class CandidateGather {
+ public:
+  CandidateGather(const World& world, SweepScratch& scratch) : world_(world), scratch_(scratch) {
+    const std::size_t triangleCount = world.triangles().size();
+    if (scratch.stamp_.size() < triangleCount) scratch.stamp_.resize(triangleCount, 0);
+    if (++scratch.generation_ == 0) {  // wrapped: old stamps could collide
+      std::fill(scratch.stamp_.begin(), scratch.stamp_.end(), 0);
+      scratch.generation_ = 1;
+    }
+  }
+
+  // Calls emit(triangle, box) for each triangle not listed yet whose box
+  // overlaps [low, high], already padded by the caller.
+  template <typename Emit>
+  void gather(const Vec3& low, const Vec3& high, Emit&& emit) {
+    const std::span<const std::uint32_t> references = world_.leafTriangles();
+    const std::span<const schema::Box> bounds = world_.leafTriangleBounds();
+    const std::uint32_t generation = scratch_.generation_;
+    for (const std::uint32_t leafIndex : scratch_.leaves) {
+      const schema::Leaf& leaf = world_.leaves()[leafIndex];
+      const std::uint32_t end = leaf.first() + leaf.count();
+      // The boxes are read in one run per leaf; most fail here, before the
+      // triangle's stamp or planes are touched.
+      for (std::uint32_t i = leaf.first(); i < end; ++i) {
+        const schema::Box& box = bounds[i];
+        if (box.min().x() > high.x() || box.max().x() < low.x() || box.min().y() > high.y() ||
+            box.max().y() < low.y() || box.min().z() > high.z() || box.max().z() < low.z())
+          continue;
+        const std::uint32_t triangle = references[i];
+        if (scratch_.stamp_[triangle] == generation) continue;
+        scratch_.stamp_[triangle] = generation;
+        emit(triangle, box);
+      }
+    }
+  }
+
+ private:
+  const World& world_;
+  SweepScratch& scratch_;
+};
+
+namespace {
+
+// Grows a box by the query margin: kSweepMarginMetres plus about 4 ulp of
+// the coordinate, as at the tree's planes.
+void padBox(Vec3& low, Vec3& high) {
+  const Vec3 pad =
+      Vec3::Constant(kSweepMarginMetres) + 4e-7f * low.cwiseAbs().cwiseMax(high.cwiseAbs());
+  low -= pad;
+  high += pad;
+}
+
+}  // namespace
+
+Bounds sweptBounds(const Vec3& from, const Vec3& to, EllipsoidRadii radii) {
+  const Vec3 extent(radii.xz, radii.y, radii.xz);
+  Bounds b{from.cwiseMin(to) - extent, from.cwiseMax(to) + extent};
+  padBox(b.low, b.high);
+  return b;
+}
+
 void collectCandidateTriangles(const World& world, const Vec3& from, const Vec3& to,
                                EllipsoidRadii radii, SweepScratch& scratch,
                                std::vector<std::uint32_t>& trianglesOut) {
   trianglesOut.clear();
   scratch.leaves.clear();
   collectSweptLeaves(world, from, to, radii, scratch.leaves);
+  const Bounds swept = sweptBounds(from, to, radii);
+  CandidateGather(world, scratch)
+      .gather(swept.low, swept.high,
+              [&](std::uint32_t t, const schema::Box&) { trianglesOut.push_back(t); });
+}
 
-  const std::size_t triangleCount = world.triangles().size();
-  if (scratch.stamp_.size() < triangleCount) scratch.stamp_.resize(triangleCount, 0);
-  if (++scratch.generation_ == 0) {  // wrapped: old stamps could collide
-    std::fill(scratch.stamp_.begin(), scratch.stamp_.end(), 0);
-    scratch.generation_ = 1;
-  }
-  const std::uint32_t generation = scratch.generation_;
-  for (const std::uint32_t leaf : scratch.leaves) {
-    for (const std::uint32_t triangle : world.leafTriangleList(leaf)) {
-      if (scratch.stamp_[triangle] == generation) continue;
-      scratch.stamp_[triangle] = generation;
-      trianglesOut.push_back(triangle);
-    }
-  }
+void collectBoxCandidates(const World& world, const Vec3& low, const Vec3& high,
+                          SweepScratch& scratch, std::vector<CandidateTriangle>& out) {
+  out.clear();
+  scratch.leaves.clear();
+  Vec3 paddedLow = low, paddedHigh = high;
+  padBox(paddedLow, paddedHigh);
+  collectBoxLeaves(world, paddedLow, paddedHigh, scratch.leaves);
+  CandidateGather(world, scratch)
+      .gather(paddedLow, paddedHigh, [&](std::uint32_t t, const schema::Box& box) {
+        out.push_back({t, toVec3(box.min()), toVec3(box.max())});
+      });
+}
+
+void NearbyTriangles::cover(const World& world, const Vec3& low, const Vec3& high, float pad,
+                            SweepScratch& scratch) {
+  if (world_ == &world && (low.array() >= low_.array()).all() &&
+      (high.array() <= high_.array()).all())
+    return;
+  world_ = &world;
+  low_ = low - Vec3::Constant(pad);
+  high_ = high + Vec3::Constant(pad);
+  ++queries_;
+  collectBoxCandidates(world, low_, high_, scratch, list_);
 }
 
 }  // namespace bspf

@@ -37,6 +37,10 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
                        EllipsoidRadii radii, const MovementSettings& settings,
                        float walkableNormalY, StepScratch& scratch);
 
+/// Added to a slide's first tree query on every side, metres, on top of the
+/// move's length, so the iterations of a slide rarely query again.
+inline constexpr float kNearbyPadMetres = 0.05f;
+
 /// The narrow phase `settings.method` names.
 SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,
                               EllipsoidRadii radii, const MovementSettings& settings,

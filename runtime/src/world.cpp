@@ -44,6 +44,7 @@ struct WorldAccess {
     w.leaves_ = structs(table->leaves());
     const auto* lt = table->leaf_triangles();
     w.leafTriangles_ = {lt->data(), lt->size()};
+    w.leafTriangleBounds_ = structs(table->leaf_triangle_bounds());
   }
   template <typename T>
   static std::span<const T> structs(const flatbuffers::Vector<const T*>* v) {
@@ -89,7 +90,8 @@ bool checkGeometry(const schema::World& w, Checker& check) {
   const auto* vertices = w.vertices();
   const auto* triangles = w.triangles();
   const auto* planes = w.triangle_planes();
-  if (!vertices || !triangles || !planes || !w.nodes() || !w.leaves() || !w.leaf_triangles())
+  if (!vertices || !triangles || !planes || !w.nodes() || !w.leaves() || !w.leaf_triangles() ||
+      !w.leaf_triangle_bounds())
     return check.fail("a required vector is missing");
   if (!w.bounds_min() || !w.bounds_max() || !Checker::finite(*w.bounds_min()) ||
       !Checker::finite(*w.bounds_max()))
@@ -137,6 +139,24 @@ bool checkTree(const schema::World& w, Checker& check, std::uint32_t& depthOut) 
   for (flatbuffers::uoffset_t i = 0; i < leafTriangles->size(); ++i)
     if (leafTriangles->Get(i) >= triangleCount)
       return check.fail("leaf triangle entry " + std::to_string(i) + " is out of range");
+  // Queries reject a triangle by its entry's box alone: a box that does not
+  // hold the triangle would hide it from every query.
+  const auto* bounds = w.leaf_triangle_bounds();
+  if (bounds->size() != leafTriangles->size())
+    return check.fail("leaf_triangle_bounds and leaf_triangles differ in length");
+  for (flatbuffers::uoffset_t i = 0; i < bounds->size(); ++i) {
+    const schema::Box& box = *bounds->Get(i);
+    const schema::Triangle& t = *w.triangles()->Get(leafTriangles->Get(i));
+    bool holds = Checker::finite(box.min()) && Checker::finite(box.max());
+    for (const std::uint32_t v : {t.v0(), t.v1(), t.v2()}) {
+      const schema::Vec3& p = *w.vertices()->Get(v);
+      holds = holds && box.min().x() <= p.x() && p.x() <= box.max().x() && box.min().y() <= p.y() &&
+              p.y() <= box.max().y() && box.min().z() <= p.z() && p.z() <= box.max().z();
+    }
+    if (!holds)
+      return check.fail("the bounding box of leaf triangle entry " + std::to_string(i) +
+                        " does not hold its triangle");
+  }
   for (flatbuffers::uoffset_t i = 0; i < nodes->size(); ++i)
     if (!check.plane(nodes->Get(i)->split(), "split plane of node", i)) return false;
 

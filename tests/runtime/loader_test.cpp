@@ -154,7 +154,36 @@ struct Content {
   std::int32_t root = -1;
   std::uint32_t treeDepth = 0;
   bool omitLeafTriangles = false;
+  /// Written as given; when empty, each entry's box is made from its
+  /// triangle's vertices (an empty box where an index is out of range).
+  std::vector<schema::Box> leafBounds;
+  bool omitLeafBounds = false;
 };
+
+// The bounding box of each leaf entry's triangle, as bspc writes it.
+std::vector<schema::Box> leafBoundsOf(const Content& c) {
+  std::vector<schema::Box> boxes;
+  for (const std::uint32_t t : c.leafTriangles) {
+    schema::Box box;
+    if (t < c.triangles.size()) {
+      const schema::Triangle& tri = c.triangles[t];
+      bool first = true;
+      for (const std::uint32_t v : {tri.v0(), tri.v1(), tri.v2()}) {
+        if (v >= c.vertices.size()) continue;
+        const schema::Vec3& p = c.vertices[v];
+        const schema::Vec3& lo = first ? p : box.min();
+        const schema::Vec3& hi = first ? p : box.max();
+        box = schema::Box(
+            schema::Vec3(std::min(lo.x(), p.x()), std::min(lo.y(), p.y()), std::min(lo.z(), p.z())),
+            schema::Vec3(std::max(hi.x(), p.x()), std::max(hi.y(), p.y()),
+                         std::max(hi.z(), p.z())));
+        first = false;
+      }
+    }
+    boxes.push_back(box);
+  }
+  return boxes;
+}
 
 Content contentOf(const World& world) {
   Content c;
@@ -172,6 +201,7 @@ Content contentOf(const World& world) {
   c.nodes.assign(world.nodes().begin(), world.nodes().end());
   c.leaves.assign(world.leaves().begin(), world.leaves().end());
   c.leafTriangles.assign(world.leafTriangles().begin(), world.leafTriangles().end());
+  c.leafBounds.assign(world.leafTriangleBounds().begin(), world.leafTriangleBounds().end());
   c.root = world.root();
   c.treeDepth = world.treeDepth();
   return c;
@@ -197,9 +227,13 @@ Blob serialize(const Content& c) {
   const auto leafTriangles = c.omitLeafTriangles
                                  ? flatbuffers::Offset<flatbuffers::Vector<std::uint32_t>>()
                                  : fbb.CreateVector(c.leafTriangles);
-  const auto world = schema::CreateWorld(fbb, c.formatVersion, c.metresPerUnit, c.upAxis,
-                                         &c.boundsMin, &c.boundsMax, build, vertices, triangles,
-                                         planes, nodes, leaves, leafTriangles, c.root, c.treeDepth);
+  const auto leafBounds =
+      c.omitLeafBounds
+          ? flatbuffers::Offset<flatbuffers::Vector<const schema::Box*>>()
+          : fbb.CreateVectorOfStructs(c.leafBounds.empty() ? leafBoundsOf(c) : c.leafBounds);
+  const auto world = schema::CreateWorld(
+      fbb, c.formatVersion, c.metresPerUnit, c.upAxis, &c.boundsMin, &c.boundsMax, build, vertices,
+      triangles, planes, nodes, leaves, leafTriangles, c.root, c.treeDepth, leafBounds);
   fbb.FinishSizePrefixed(world, kFileIdentifier);
   return {fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()};
 }
@@ -547,9 +581,9 @@ TEST_CASE("A blob of another format version is WrongVersion naming both versions
   }
   SECTION("opened from a file, the message names it") {
     Content c = contentOf(boxBlob());
-    c.formatVersion = 2;
+    c.formatVersion = kFormatVersion - 1;  // a blob of the previous bspc
     const fs::path dir = test::freshTempDir("loader-version");
-    const fs::path path = dir / "v2.bspf";
+    const fs::path path = dir / "old.bspf";
     writeFile(path, serialize(c));
     const OpenResult r = openWorld(path);
     CHECK(r.status == LoadStatus::WrongVersion);
@@ -561,13 +595,14 @@ TEST_CASE("A blob of another format version is WrongVersion naming both versions
 TEST_CASE("The version is checked before the rest of the layout", "[runtime][loader]") {
   // A future format may lay out its fields differently: the loader must still
   // say "wrong version" rather than "malformed".
-  SECTION("a version-2 blob whose vertices vector is broken is WrongVersion") {
+  SECTION("a next-version blob whose vertices vector is broken is WrongVersion") {
     Blob blob = boxBlob();
     const std::size_t vertices = fieldPosition(blob, schema::World::VT_VERTICES);
     const std::size_t vector = vertices + readAt<std::uint32_t>(blob, vertices);
     writeAt<std::uint32_t>(blob, vector, 0x7fffffffu);  // element count far past the end
     CHECK(view(blob).status == LoadStatus::Malformed);
-    writeAt<std::uint32_t>(blob, fieldPosition(blob, schema::World::VT_FORMAT_VERSION), 2);
+    writeAt<std::uint32_t>(blob, fieldPosition(blob, schema::World::VT_FORMAT_VERSION),
+                           kFormatVersion + 1);
     CHECK(view(blob).status == LoadStatus::WrongVersion);
   }
   SECTION("a table holding only a version") {
@@ -886,6 +921,34 @@ TEST_CASE("Semantic violations are Malformed with a message saying what is wrong
        "no triangles"},
       {"a missing leaf_triangles vector", [](Content& c) { c.omitLeafTriangles = true; },
        "missing"},
+      {"a missing leaf_triangle_bounds vector", [](Content& c) { c.omitLeafBounds = true; },
+       "missing"},
+      {"leaf_triangle_bounds shorter than leaf_triangles",
+       [](Content& c) { c.leafBounds.pop_back(); },
+       "leaf_triangle_bounds and leaf_triangles differ in length"},
+      {"a leaf entry's box one ulp short of its triangle's highest x",
+       [](Content& c) {
+         schema::Box& box = c.leafBounds.back();
+         const schema::Vec3& high = box.max();
+         box = schema::Box(box.min(),
+                           schema::Vec3(std::nextafter(high.x(), -1e30f), high.y(), high.z()));
+       },
+       "bounding box of leaf triangle entry"},
+      {"a leaf entry's box one ulp above its triangle's lowest y",
+       [](Content& c) {
+         schema::Box& box = c.leafBounds.front();
+         const schema::Vec3& low = box.min();
+         box =
+             schema::Box(schema::Vec3(low.x(), std::nextafter(low.y(), 1e30f), low.z()), box.max());
+       },
+       "bounding box of leaf triangle entry 0"},
+      {"a NaN in a leaf entry's box",
+       [](Content& c) {
+         schema::Box& box = c.leafBounds.front();
+         box = schema::Box(box.min(), schema::Vec3(std::numeric_limits<float>::quiet_NaN(),
+                                                   box.max().y(), box.max().z()));
+       },
+       "bounding box of leaf triangle entry 0"},
       {"NaN bounds",
        [](Content& c) {
          c.boundsMax = schema::Vec3(1, std::numeric_limits<float>::quiet_NaN(), 1);

@@ -134,7 +134,9 @@ void pushBodiesApart(const World&, std::span<Body>, StepScratch&, std::span<Step
 class StepScratch {
  public:
   SweepScratch sweep;
-  std::vector<std::uint32_t> candidates;
+  /// The triangles near the body being moved: queried once per slide and
+  /// reused by its iterations (see NearbyTriangles).
+  NearbyTriangles nearby;
 
  private:
   friend void detail::pushBodiesApart(const World&, std::span<Body>, StepScratch&,

@@ -10,6 +10,7 @@
 #include <bspf/world.h>
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace bspf {
@@ -35,26 +36,93 @@ void collectSweptLeaves(const World& world, const Vec3& from, const Vec3& to, El
 /// plane counts as in front of it. Cost: O(tree depth).
 std::uint32_t locateLeaf(const World& world, const Vec3& p);
 
-/// Per-thread scratch for collectCandidateTriangles: remembers which triangles
-/// were already listed in the current query. Reusable across worlds.
+/// Appends to `leavesOut` (not cleared first) every leaf whose cell the
+/// axis-aligned box [low, high] (metres) may overlap, near side of each node
+/// (the side of the box's centre) first. Conservative like
+/// collectSweptLeaves: padded by kSweepMarginMetres at each plane.
+/// Cost: O(visited nodes). Preconditions: finite, low <= high per axis.
+void collectBoxLeaves(const World& world, const Vec3& low, const Vec3& high,
+                      std::vector<std::uint32_t>& leavesOut);
+
+/// A triangle a query found, with its bounding box from the blob (metres).
+struct CandidateTriangle {
+  std::uint32_t triangle;
+  Vec3 low, high;
+};
+
+/// Per-thread scratch for the candidate queries: the leaves of the current
+/// query and which triangles it already listed. Reusable across worlds.
 class SweepScratch {
  public:
   std::vector<std::uint32_t> leaves;
 
  private:
-  friend void collectCandidateTriangles(const World&, const Vec3&, const Vec3&, EllipsoidRadii,
-                                        SweepScratch&, std::vector<std::uint32_t>&);
+  friend class CandidateGather;
   std::vector<std::uint32_t> stamp_;
   std::uint32_t generation_ = 0;
 };
 
-/// Replaces the contents of `trianglesOut` with the triangle indices listed by
-/// the leaves collectSweptLeaves returns, each once, in leaf order (the order
-/// of first appearance along the path). Every triangle any point of the swept
-/// volume touches is among them. Cost: O(visited nodes + listed references);
-/// allocates only when `scratch` or `trianglesOut` must grow.
+/// Replaces the contents of `trianglesOut` with the triangles that the
+/// leaves collectSweptLeaves returns list and whose bounding box overlaps the
+/// swept volume's (padded by kSweepMarginMetres), each once, in leaf order
+/// (the order of first appearance along the path). Every triangle any point
+/// of the swept volume touches is among them. Cost: O(visited nodes + listed
+/// references), each reference a read of its 24-byte box; allocates only
+/// when `scratch` or `trianglesOut` must grow.
 void collectCandidateTriangles(const World& world, const Vec3& from, const Vec3& to,
                                EllipsoidRadii radii, SweepScratch& scratch,
                                std::vector<std::uint32_t>& trianglesOut);
+
+/// Replaces the contents of `out` with the triangles, each once, in leaf
+/// order, whose bounding box overlaps the box [low, high] (metres, padded by
+/// kSweepMarginMetres), with their boxes. Every triangle with a point in the
+/// box is among them. Cost and allocation as collectCandidateTriangles.
+/// Preconditions: finite, low <= high per axis.
+void collectBoxCandidates(const World& world, const Vec3& low, const Vec3& high,
+                          SweepScratch& scratch, std::vector<CandidateTriangle>& out);
+
+/// The triangles near a moving body, for several queries in a row: one box
+/// query, padded, answers every later request for a box inside the one
+/// queried (the slides of one step, which move the end by about the move's
+/// length at most). Reusable across worlds; not shared between threads.
+class NearbyTriangles {
+ public:
+  /// Makes list() hold (at least) every triangle whose bounding box overlaps
+  /// [low, high] (metres). Queries the tree for [low, high] grown by `pad`
+  /// metres on every side only when [low, high] is not inside the box last
+  /// queried on this `world`. Preconditions: finite, low <= high, pad >= 0.
+  void cover(const World& world, const Vec3& low, const Vec3& high, float pad,
+             SweepScratch& scratch);
+  /// Forgets the last query, so the next cover() queries again.
+  void clear() { world_ = nullptr; }
+  /// The triangles of the last query, in leaf order, with their boxes.
+  std::span<const CandidateTriangle> list() const { return list_; }
+  /// How many tree queries cover() made since construction (diagnostics).
+  std::uint64_t queries() const { return queries_; }
+
+ private:
+  const World* world_ = nullptr;
+  Vec3 low_ = Vec3::Zero(), high_ = Vec3::Zero();
+  std::vector<CandidateTriangle> list_;
+  std::uint64_t queries_ = 0;
+};
+
+/// An axis-aligned box, metres.
+struct Bounds {
+  Vec3 low, high;
+};
+
+/// The bounding box of the ellipsoid with `radii` swept from centre `from` to
+/// centre `to`, padded like the queries (kSweepMarginMetres plus about 4 ulp
+/// of the coordinates), so a triangle whose box misses it cannot touch the
+/// swept volume.
+Bounds sweptBounds(const Vec3& from, const Vec3& to, EllipsoidRadii radii);
+
+/// Whether the boxes [aLow, aHigh] and [bLow, bHigh] overlap (touching
+/// counts).
+inline bool boxesOverlap(const Vec3& aLow, const Vec3& aHigh, const Vec3& bLow, const Vec3& bHigh) {
+  return aLow.x() <= bHigh.x() && bLow.x() <= aHigh.x() && aLow.y() <= bHigh.y() &&
+         bLow.y() <= aHigh.y() && aLow.z() <= bHigh.z() && bLow.z() <= aHigh.z();
+}
 
 }  // namespace bspf

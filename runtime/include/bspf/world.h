@@ -25,7 +25,7 @@ namespace bspf {
 
 /// The blob format version this runtime reads. bspc writes it; the loader
 /// refuses any other value with LoadStatus::WrongVersion.
-inline constexpr std::uint32_t kFormatVersion = 1;
+inline constexpr std::uint32_t kFormatVersion = 2;
 
 /// The four-character file identifier after the size prefix.
 inline constexpr const char* kFileIdentifier = "BSPF";
@@ -49,7 +49,8 @@ enum class LoadStatus {
   /// The bytes are not a well-formed blob: stray bytes after it, FlatBuffers
   /// verification failed, or a semantic check did (a missing vector, an index
   /// out of range, a node graph that is not a tree, a non-finite float, a
-  /// normal not of unit length, units other than metres with Y up).
+  /// normal not of unit length, a leaf entry's bounding box that does not
+  /// hold its triangle, units other than metres with Y up).
   Malformed,
   /// The caller's bytes are not 8-byte aligned (a broken precondition of
   /// viewWorld that is reported rather than read misaligned).
@@ -74,6 +75,8 @@ class World {
   std::span<const schema::Leaf> leaves() const { return leaves_; }
   /// Triangle indices, in ranges owned by the leaves.
   std::span<const std::uint32_t> leafTriangles() const { return leafTriangles_; }
+  /// Parallel to leafTriangles(): each entry's triangle's bounding box.
+  std::span<const schema::Box> leafTriangleBounds() const { return leafTriangleBounds_; }
   /// The root child reference; -1 (leaf 0) when the tree is a single leaf.
   std::int32_t root() const { return root_; }
   /// Depth of the deepest leaf (<= kMaxTreeDepth).
@@ -98,6 +101,7 @@ class World {
   std::span<const schema::Node> nodes_;
   std::span<const schema::Leaf> leaves_;
   std::span<const std::uint32_t> leafTriangles_;
+  std::span<const schema::Box> leafTriangleBounds_;
   std::int32_t root_ = -1;
   std::uint32_t treeDepth_ = 0;
 };
