@@ -129,7 +129,7 @@ void addContact(SlideResult& result, const Vec3& normal, float walkableNormalY, 
 // front of them: penetration) out along each closest-point direction, to
 // 1 + padding, in up to 8 rounds.
 void recoverFromPenetration(const World& world, Vec3& p, const Vec3& toSphere, float padding,
-                            float walkableNormalY, EllipsoidRadii radii, float queryPad,
+                            float walkableNormalY, EllipsoidRadii radii, float moveLength,
                             StepScratch& scratch, SlideResult& result) {
   // Gauss-Seidel: each round pushes out of every penetrated triangle in
   // turn, so a body wedged in a crease leaves it along the bisector instead
@@ -137,9 +137,9 @@ void recoverFromPenetration(const World& world, Vec3& p, const Vec3& toSphere, f
   for (int round = 0; round < 8; ++round) {
     const Vec3 centre = p.cwiseQuotient(toSphere);
     const Bounds here = sweptBounds(centre, centre, radii);
-    scratch.nearby.cover(world, here.low, here.high, queryPad, scratch.sweep);
+    LocalCandidates local;
     bool pushed = false;
-    for (const CandidateTriangle& candidate : scratch.nearby.list()) {
+    for (const CandidateTriangle& candidate : local.around(world, here, moveLength, scratch)) {
       if (!boxesOverlap(candidate.low, candidate.high, here.low, here.high)) continue;
       const std::uint32_t t = candidate.triangle;
       const Triangle tri = sphereSpaceTriangle(world, t, toSphere);
@@ -171,18 +171,16 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
   std::array<Vec3, 3> planes;  // sphere-space normals slid along this step
   int planeCount = 0;
   bool recovered = false;
-  // One tree query serves every iteration (see slideWithPlanes).
-  const float queryPad = (desiredEnd - start).norm() + kNearbyPadMetres;
-  scratch.nearby.clear();
+  const float moveLength = (desiredEnd - start).norm();
+  LocalCandidates local;
   for (int iteration = 0;; ++iteration) {
     if (move.squaredNorm() < 1e-14f) break;
     const Vec3 from = p.cwiseQuotient(toSphere);
     const Vec3 to = (p + move).cwiseQuotient(toSphere);
     const Bounds swept = sweptBounds(from, to, radii);
-    scratch.nearby.cover(world, swept.low, swept.high, queryPad, scratch.sweep);
     Impact impact;
     bool penetrating = false;
-    for (const CandidateTriangle& candidate : scratch.nearby.list()) {
+    for (const CandidateTriangle& candidate : local.around(world, swept, moveLength, scratch)) {
       if (!boxesOverlap(candidate.low, candidate.high, swept.low, swept.high)) continue;
       const std::uint32_t t = candidate.triangle;
       // The side-value pre-check on the stored face plane: a path that stays
@@ -198,8 +196,8 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     // is first moved out, then the sweep is made again from there.
     if (penetrating && iteration == 0 && !recovered) {
       recovered = true;
-      recoverFromPenetration(world, p, toSphere, padding, walkableNormalY, radii, queryPad, scratch,
-                             result);
+      recoverFromPenetration(world, p, toSphere, padding, walkableNormalY, radii, moveLength,
+                             scratch, result);
       --iteration;
       continue;
     }

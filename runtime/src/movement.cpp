@@ -141,8 +141,15 @@ void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3
   assert(forces.size() == bodies.size());
   assert(reports.empty() || reports.size() == bodies.size());
   auto reportOf = [&](std::size_t i) { return reports.empty() ? nullptr : &reports[i]; };
-  for (std::size_t i = 0; i < bodies.size(); ++i)
+  // Each body keeps its own nearby triangles from frame to frame (swapped in,
+  // no copy). A body list reordered by the caller only costs re-queries: a
+  // cache answers only boxes inside the one it queried, whoever asks.
+  if (scratch.bodyNearby_.size() < bodies.size()) scratch.bodyNearby_.resize(bodies.size());
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    std::swap(scratch.nearby, scratch.bodyNearby_[i]);
     stepBody(world, bodies[i], forces[i], dt, scratch, reportOf(i));
+    std::swap(scratch.nearby, scratch.bodyNearby_[i]);
+  }
 
   detail::pushBodiesApart(world, bodies, scratch, reports);
 }

@@ -20,16 +20,15 @@ struct Hit {
 // The triangle in the way of the move start -> end with the lowest facing
 // value, if any.
 std::optional<Hit> findBlockingTriangle(const World& world, const Vec3& start, const Vec3& end,
-                                        EllipsoidRadii radii,
+                                        EllipsoidRadii radii, const Bounds& swept,
                                         std::span<const CandidateTriangle> nearby) {
   const Vec3 move = end - start;
   const float moveLength = move.norm();
   const Vec3 direction = moveLength > 0 ? Vec3(move / moveLength) : Vec3::Zero();
-  const Bounds swept = sweptBounds(start, end, radii);
   std::optional<Hit> best;
   for (const CandidateTriangle& candidate : nearby) {
-    // The boxes are in the list itself, read in one run: most candidates
-    // stop here without their 112-byte plane record being fetched.
+    // The boxes are in the list itself: candidates stop here without their
+    // 112-byte plane record being fetched.
     if (!boxesOverlap(candidate.low, candidate.high, swept.low, swept.high)) continue;
     const std::uint32_t t = candidate.triangle;
     const schema::TrianglePlanes& planes = world.trianglePlanes()[t];
@@ -111,15 +110,12 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
   // A crease solution may move the end at most this far: a frame's travel
   // plus the body's size.
   const float maxShift = (desiredEnd - start).norm() + std::max(radii.xz, radii.y);
-  // One tree query serves every iteration: a slide moves the end by about
-  // the move's length at most, so the first query is padded by that much.
-  const float pad = (desiredEnd - start).norm() + kNearbyPadMetres;
-  scratch.nearby.clear();
+  const float moveLength = (desiredEnd - start).norm();
+  LocalCandidates local;
   for (int iteration = 0;; ++iteration) {
     const Bounds swept = sweptBounds(start, result.end, radii);
-    scratch.nearby.cover(world, swept.low, swept.high, pad, scratch.sweep);
-    const std::optional<Hit> hit =
-        findBlockingTriangle(world, start, result.end, radii, scratch.nearby.list());
+    const std::optional<Hit> hit = findBlockingTriangle(
+        world, start, result.end, radii, swept, local.around(world, swept, moveLength, scratch));
     if (!hit) return result;
     if (iteration == settings.maxIterations) {
       result.refused = true;

@@ -169,10 +169,10 @@ void collectBoxCandidates(const World& world, const Vec3& low, const Vec3& high,
 
 void NearbyTriangles::cover(const World& world, const Vec3& low, const Vec3& high, float pad,
                             SweepScratch& scratch) {
-  if (world_ == &world && (low.array() >= low_.array()).all() &&
+  if (worldId_ == world.id() && (low.array() >= low_.array()).all() &&
       (high.array() <= high_.array()).all())
     return;
-  world_ = &world;
+  worldId_ = world.id();
   low_ = low - Vec3::Constant(pad);
   high_ = high + Vec3::Constant(pad);
   ++queries_;

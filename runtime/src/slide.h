@@ -37,9 +37,42 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
                        EllipsoidRadii radii, const MovementSettings& settings,
                        float walkableNormalY, StepScratch& scratch);
 
-/// Added to a slide's first tree query on every side, metres, on top of the
-/// move's length, so the iterations of a slide rarely query again.
-inline constexpr float kNearbyPadMetres = 0.05f;
+/// How far, metres, a slide's tree query reaches past the box it needs on
+/// every side: enough for its iterations (which move the end by about the
+/// move's length at most) and for the next few frames of travel, so most
+/// steps query nothing. Larger pads query less often but list more triangles.
+inline float nearbyPad(float moveLength) { return 2.0f * moveLength + 0.1f; }
+
+/// The triangles one slide's iterations test: the body's nearby triangles
+/// (StepScratch::nearby) whose box overlaps a local box around the slide,
+/// copied into StepScratch::slideCandidates, a short list each iteration
+/// scans. Filled again only when an iteration's swept box leaves the local
+/// box (a slide moves the end by about the move's length at most).
+class LocalCandidates {
+ public:
+  /// Candidates whose box may overlap `swept` (filter by it: the list holds
+  /// more). `moveLength`, metres, sizes the local box and the tree query.
+  std::span<const CandidateTriangle> around(const World& world, const Bounds& swept,
+                                            float moveLength, StepScratch& scratch) {
+    if (!valid_ || !(swept.low.array() >= local_.low.array()).all() ||
+        !(swept.high.array() <= local_.high.array()).all()) {
+      valid_ = true;
+      const Vec3 grow = Vec3::Constant(moveLength + kLocalGrowMetres);
+      local_ = {swept.low - grow, swept.high + grow};
+      scratch.nearby.cover(world, local_.low, local_.high, nearbyPad(moveLength), scratch.sweep);
+      scratch.slideCandidates.clear();
+      for (const CandidateTriangle& c : scratch.nearby.list())
+        if (boxesOverlap(c.low, c.high, local_.low, local_.high))
+          scratch.slideCandidates.push_back(c);
+    }
+    return scratch.slideCandidates;
+  }
+
+ private:
+  static constexpr float kLocalGrowMetres = 0.02f;
+  Bounds local_;
+  bool valid_ = false;
+};
 
 /// The narrow phase `settings.method` names.
 SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,

@@ -1,6 +1,7 @@
 #include <bspf/world.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <vector>
@@ -32,6 +33,8 @@ std::span<const std::uint32_t> World::leafTriangleList(std::uint32_t leafIndex) 
 struct WorldAccess {
   static void set(World& w, std::shared_ptr<const void> owner, std::span<const std::byte> bytes,
                   const schema::World* table, std::uint32_t depth) {
+    static std::atomic<std::uint64_t> lastId{0};
+    w.id_ = ++lastId;
     w.owner_ = std::move(owner);
     w.bytes_ = bytes;
     w.root_table_ = table;

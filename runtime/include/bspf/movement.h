@@ -134,13 +134,20 @@ void pushBodiesApart(const World&, std::span<Body>, StepScratch&, std::span<Step
 class StepScratch {
  public:
   SweepScratch sweep;
-  /// The triangles near the body being moved: queried once per slide and
-  /// reused by its iterations (see NearbyTriangles).
+  /// The triangles near the body being moved (see NearbyTriangles): kept
+  /// from step to step, so a body stepped alone with its own scratch reuses
+  /// it over frames; stepBodies keeps one per body.
   NearbyTriangles nearby;
+  /// Working list of the narrow phases: the nearby triangles one slide
+  /// tests. Its contents between calls are unspecified.
+  std::vector<CandidateTriangle> slideCandidates;
 
  private:
   friend void detail::pushBodiesApart(const World&, std::span<Body>, StepScratch&,
                                       std::span<StepReport>);
+  friend void stepBodies(const World&, std::span<Body>, std::span<const Vec3>, float, StepScratch&,
+                         std::span<StepReport>);
+  std::vector<NearbyTriangles> bodyNearby_;  // parallel to stepBodies' bodies
   std::vector<std::uint64_t> cellKeys_;
   std::vector<std::uint32_t> order_;
 };

@@ -83,25 +83,26 @@ void collectBoxCandidates(const World& world, const Vec3& low, const Vec3& high,
 
 /// The triangles near a moving body, for several queries in a row: one box
 /// query, padded, answers every later request for a box inside the one
-/// queried (the slides of one step, which move the end by about the move's
-/// length at most). Reusable across worlds; not shared between threads.
+/// queried (the slides of one step, and the next frames' steps while the
+/// body stays inside it: temporal coherence). Reusable across worlds; not
+/// shared between threads.
 class NearbyTriangles {
  public:
   /// Makes list() hold (at least) every triangle whose bounding box overlaps
   /// [low, high] (metres). Queries the tree for [low, high] grown by `pad`
   /// metres on every side only when [low, high] is not inside the box last
-  /// queried on this `world`. Preconditions: finite, low <= high, pad >= 0.
+  /// queried on this `world` (by World::id()). Preconditions: finite, low <= high, pad >= 0.
   void cover(const World& world, const Vec3& low, const Vec3& high, float pad,
              SweepScratch& scratch);
   /// Forgets the last query, so the next cover() queries again.
-  void clear() { world_ = nullptr; }
+  void clear() { worldId_ = 0; }
   /// The triangles of the last query, in leaf order, with their boxes.
   std::span<const CandidateTriangle> list() const { return list_; }
   /// How many tree queries cover() made since construction (diagnostics).
   std::uint64_t queries() const { return queries_; }
 
  private:
-  const World* world_ = nullptr;
+  std::uint64_t worldId_ = 0;
   Vec3 low_ = Vec3::Zero(), high_ = Vec3::Zero();
   std::vector<CandidateTriangle> list_;
   std::uint64_t queries_ = 0;

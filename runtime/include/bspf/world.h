@@ -89,6 +89,10 @@ class World {
   const schema::World& blob() const { return *root_table_; }
   /// The whole blob, size prefix included.
   std::span<const std::byte> bytes() const { return bytes_; }
+  /// A number unique to this opening of a blob within the process (never 0;
+  /// copies of a World share it), so caches can tell worlds apart even when
+  /// a new mapping reuses an old one's address.
+  std::uint64_t id() const { return id_; }
 
  private:
   friend struct WorldAccess;
@@ -104,6 +108,7 @@ class World {
   std::span<const schema::Box> leafTriangleBounds_;
   std::int32_t root_ = -1;
   std::uint32_t treeDepth_ = 0;
+  std::uint64_t id_ = 0;
 };
 
 /// The outcome of opening a blob: a World, or a status and a one-line message
