@@ -198,7 +198,8 @@ double pass(const RunInput& in, const FrameStepper& stepFrame, Result* measure) 
   Crowd crowd(in.starts, in.config.settings, in.seed);
   std::vector<double> frameNs;
   bspf::StepScratch oracleScratch;
-  std::vector<std::uint32_t> candidates;
+  const std::optional<bspf::oracle::LevelTriangles> judged =
+      measure ? std::optional<bspf::oracle::LevelTriangles>(in.world) : std::nullopt;
   std::vector<Vec3> references(in.starts.size());
   for (int frame = 0; frame < in.frames; ++frame) {
     crowd.steer(in.config.dt);
@@ -215,8 +216,8 @@ double pass(const RunInput& in, const FrameStepper& stepFrame, Result* measure) 
     if (!measure) continue;
     for (std::size_t i = 0; i < bodies.size(); ++i) {
       measure->deviations.push_back((bodies[i].position - references[i]).cast<double>().norm());
-      measure->penetrations.push_back(bspf::oracle::penetration(
-          in.world, bodies[i].position, kRadii, oracleScratch.sweep, candidates));
+      measure->penetrations.push_back(
+          bspf::oracle::penetration(*judged, bodies[i].position, kRadii));
       measure->refused += reports[i].refused;
       measure->iterations += reports[i].iterations;
     }
