@@ -25,6 +25,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -273,7 +274,8 @@ int main(int argc, char** argv) {
   CLI::App app{"bspf_sweep: speed against accuracy of the narrow phases, one knob at a time",
                "bspf_sweep"};
   std::string outPath = "speed-accuracy.csv", samplesDir = BSPF_SAMPLES_DIR,
-              sharedDir = BSPF_SHARED_LEVELS_DIR;
+              sharedDir = std::getenv("BSPF_SHARED_LEVELS") ? std::getenv("BSPF_SHARED_LEVELS")
+                                                            : BSPF_SHARED_LEVELS_DIR;
   std::vector<std::string> only;
   bool quick = false;
   int agents = 32, frames = 300, repeats = 3;
