@@ -25,6 +25,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -198,7 +199,8 @@ double pass(const RunInput& in, const FrameStepper& stepFrame, Result* measure) 
   Crowd crowd(in.starts, in.config.settings, in.seed);
   std::vector<double> frameNs;
   bspf::StepScratch oracleScratch;
-  std::vector<std::uint32_t> candidates;
+  const std::optional<bspf::oracle::LevelTriangles> judged =
+      measure ? std::optional<bspf::oracle::LevelTriangles>(in.world) : std::nullopt;
   std::vector<Vec3> references(in.starts.size());
   for (int frame = 0; frame < in.frames; ++frame) {
     crowd.steer(in.config.dt);
@@ -215,8 +217,8 @@ double pass(const RunInput& in, const FrameStepper& stepFrame, Result* measure) 
     if (!measure) continue;
     for (std::size_t i = 0; i < bodies.size(); ++i) {
       measure->deviations.push_back((bodies[i].position - references[i]).cast<double>().norm());
-      measure->penetrations.push_back(bspf::oracle::penetration(
-          in.world, bodies[i].position, kRadii, oracleScratch.sweep, candidates));
+      measure->penetrations.push_back(
+          bspf::oracle::penetration(*judged, bodies[i].position, kRadii));
       measure->refused += reports[i].refused;
       measure->iterations += reports[i].iterations;
     }
@@ -272,7 +274,8 @@ int main(int argc, char** argv) {
   CLI::App app{"bspf_sweep: speed against accuracy of the narrow phases, one knob at a time",
                "bspf_sweep"};
   std::string outPath = "speed-accuracy.csv", samplesDir = BSPF_SAMPLES_DIR,
-              sharedDir = BSPF_SHARED_LEVELS_DIR;
+              sharedDir = std::getenv("BSPF_SHARED_LEVELS") ? std::getenv("BSPF_SHARED_LEVELS")
+                                                            : BSPF_SHARED_LEVELS_DIR;
   std::vector<std::string> only;
   bool quick = false;
   int agents = 32, frames = 300, repeats = 3;

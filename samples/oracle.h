@@ -4,7 +4,7 @@
 #pragma once
 
 #include <bspf/movement.h>
-#include <bspf/query.h>
+#include <bspf/world.h>
 
 #include <Eigen/Core>
 #include <algorithm>
@@ -12,28 +12,69 @@
 #include <cstdint>
 #include <vector>
 
+#include "reference_geometry.h"
+
 namespace bspf::oracle {
+
+/// Every triangle of a level in double precision, with its bounding box, for
+/// penetration(). Built once per world (one pass over its triangles); the
+/// judge reads the blob's vertices itself and never the runtime's tree.
+class LevelTriangles {
+ public:
+  explicit LevelTriangles(const World& world) {
+    const auto vertex = [&](std::uint32_t v) -> reference::Point {
+      return toVec3(world.vertices()[v]).cast<double>();
+    };
+    corners_.reserve(world.triangles().size());
+    boxes_.reserve(world.triangles().size());
+    for (const schema::Triangle& tri : world.triangles()) {
+      const Corners corners{vertex(tri.v0()), vertex(tri.v1()), vertex(tri.v2())};
+      // The corners are floats widened to double, so the box is exact.
+      boxes_.push_back({corners.a.cwiseMin(corners.b).cwiseMin(corners.c),
+                        corners.a.cwiseMax(corners.b).cwiseMax(corners.c)});
+      corners_.push_back(corners);
+    }
+  }
+
+  struct Corners {
+    reference::Point a, b, c;
+  };
+  struct Box {
+    reference::Point low, high;
+  };
+  std::size_t size() const { return corners_.size(); }
+  const Corners& corners(std::size_t t) const { return corners_[t]; }
+  const Box& box(std::size_t t) const { return boxes_[t]; }
+
+ private:
+  // Boxes apart from corners: the scan reads only boxes for most triangles.
+  std::vector<Corners> corners_;
+  std::vector<Box> boxes_;
+};
 
 /// How deep an ellipsoid at `centre` is in the level, as a fraction of its
 /// size: 1 - (distance from the centre to the nearest triangle it faces, in
 /// the space where the ellipsoid is the unit sphere). 0 when it touches
 /// nothing; 0.1 means the surface is a tenth of the way in towards the centre
 /// along the contact direction. Triangles whose back the centre sees are
-/// ignored (they are one-sided, as in the runtime).
-inline double penetration(const World& world, const Vec3& centre, EllipsoidRadii radii,
-                          SweepScratch& scratch, std::vector<std::uint32_t>& candidates) {
-  collectCandidateTriangles(world, centre, centre, radii, scratch, candidates);
-  const Eigen::Vector3d toSphere(1.0 / radii.xz, 1.0 / radii.y, 1.0 / radii.xz);
-  const Eigen::Vector3d p = centre.cast<double>().cwiseProduct(toSphere);
+/// ignored (they are one-sided, as in the runtime). Brute force over every
+/// triangle; only those whose box misses the ellipsoid's box are skipped.
+inline double penetration(const LevelTriangles& level, const Vec3& centre, EllipsoidRadii radii) {
+  const reference::Point extent(radii.xz, radii.y, radii.xz);
+  const reference::Point low = centre.cast<double>() - extent;
+  const reference::Point high = centre.cast<double>() + extent;
+  const reference::Point toSphere = extent.cwiseInverse();
+  const reference::Point p = centre.cast<double>().cwiseProduct(toSphere);
   double nearest = 1;
-  for (const std::uint32_t t : candidates) {
-    const schema::Triangle& tri = world.triangles()[t];
-    auto corner = [&](std::uint32_t v) -> Eigen::Vector3d {
-      return toVec3(world.vertices()[v]).cast<double>().cwiseProduct(toSphere);
-    };
-    const Eigen::Vector3d a = corner(tri.v0()), b = corner(tri.v1()), c = corner(tri.v2());
+  for (std::size_t t = 0; t < level.size(); ++t) {
+    const LevelTriangles::Box& box = level.box(t);
+    if ((box.low.array() > high.array()).any() || (box.high.array() < low.array()).any()) continue;
+    const LevelTriangles::Corners& corners = level.corners(t);
+    const reference::Point a = corners.a.cwiseProduct(toSphere);
+    const reference::Point b = corners.b.cwiseProduct(toSphere);
+    const reference::Point c = corners.c.cwiseProduct(toSphere);
     if ((b - a).cross(c - a).dot(p - a) < 0) continue;  // behind a one-sided triangle
-    nearest = std::min(nearest, (closestPointOnTriangle(p, a, b, c) - p).norm());
+    nearest = std::min(nearest, (reference::closestPointOnTriangle(p, a, b, c) - p).norm());
   }
   return 1 - nearest;
 }

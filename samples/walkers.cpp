@@ -154,7 +154,8 @@ int main(int argc, char** argv) {
   long long insideSolid = 0;  // agent-frames with the centre inside a solid
   std::vector<double> penetrations, deviations;
   bspf::StepScratch oracleScratch;
-  std::vector<std::uint32_t> oracleCandidates;
+  const std::optional<bspf::oracle::LevelTriangles> judged =
+      accuracy ? std::optional<bspf::oracle::LevelTriangles>(world) : std::nullopt;
   const auto measureDeviation = [&](std::span<const bspf::Body> bodies,
                                     std::span<const bspf::Vec3> forces) {
     for (std::size_t i = 0; i < bodies.size(); ++i)
@@ -169,8 +170,7 @@ int main(int argc, char** argv) {
     if (brushes) insideSolid += bspf::walkers::countInsideSolid(*brushes, sim.bodies());
     if (accuracy)
       for (const bspf::Body& b : sim.bodies())
-        penetrations.push_back(bspf::oracle::penetration(world, b.position, b.radii,
-                                                         oracleScratch.sweep, oracleCandidates));
+        penetrations.push_back(bspf::oracle::penetration(*judged, b.position, b.radii));
     if (trace.is_open()) {
       const auto bodies = sim.bodies();
       for (std::size_t i = 0; i < bodies.size(); ++i) {

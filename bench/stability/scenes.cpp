@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstring>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 
 #include "oracle.h"
@@ -150,7 +151,8 @@ std::function<GoalResult(const Trajectory&, const Trajectory*)> followsReference
   return [=](const Trajectory& run, const Trajectory* reference) {
     const double deviation = maxDeviation(run, *reference, offset);
     return GoalResult{deviation <= tolerance,
-                      format(("max deviation from " + what + " %.3f m").c_str(), deviation)};
+                      format(("max deviation from " + what + " %.3f m").c_str(), deviation),
+                      {deviation}};
   };
 }
 
@@ -205,7 +207,8 @@ Scene thinWall() {
     float furthest = -1e30f;
     for (const auto& frame : run)
       for (const Vec3& p : frame) furthest = std::max(furthest, p.x());
-    return GoalResult{furthest < 5, format("furthest centre x %.3f (wall face at 5)", furthest)};
+    return GoalResult{
+        furthest < 5, format("furthest centre x %.3f (wall face at 5)", furthest), {furthest}};
   };
   return s;
 }
@@ -233,7 +236,8 @@ Scene crease(float degrees) {
     const double jitter = lineFitResidual(run, 0, run.size() - 30);
     return GoalResult{gap < 0.05f && jitter < 0.01,
                       format("ends %.3f m short of the deepest clear point", gap) +
-                          format(", jitter %.4f m", jitter)};
+                          format(", jitter %.4f m", jitter),
+                      {gap, jitter}};
   };
   return s;
 }
@@ -349,11 +353,14 @@ Scene slope(float degrees, float stepHeight = 0) {
       const float moved = (run.back()[1] - run[30][1]).norm();
       return GoalResult{rise > float(height) - 0.02f && moved < 0.01f,
                         format("walker rises %.2f m", rise) + format(" of %.0f", height) +
-                            format(", set-down body moves %.4f m", moved)};
+                            format(", set-down body moves %.4f m", moved),
+                        {rise, moved}};
     }
     const float drop = run[0][1].y() - run.back()[1].y();
-    return GoalResult{rise < 0.3f && drop > 0.5f, format("walker rises %.2f m", rise) +
-                                                      format(", set-down body drops %.2f m", drop)};
+    return GoalResult{
+        rise < 0.3f && drop > 0.5f,
+        format("walker rises %.2f m", rise) + format(", set-down body drops %.2f m", drop),
+        {rise, drop}};
   };
   return s;
 }
@@ -378,7 +385,8 @@ Scene stairs(float riser, float stepHeight = 0) {
     float climbed = 0;
     for (const auto& frame : run) climbed = std::max(climbed, frame[0].y() - kStandY);
     return GoalResult{climbed > top - 0.02f,
-                      format("climbs %.2f m", climbed) + format(" of %.2f m", top)};
+                      format("climbs %.2f m", climbed) + format(" of %.2f m", top),
+                      {climbed}};
   };
   return s;
 }
@@ -412,8 +420,10 @@ Scene farFromOrigin() {
     const Trajectory lastRun{run.back()}, lastReference{reference->back()};
     const double end = maxDeviation(lastRun, lastReference, far);
     const double drift = maxDeviation(run, *reference, far);
-    return GoalResult{end <= 0.01, format("ends %.4f m from the origin run", end) +
-                                       format(" (drift on the way %.3f m)", drift)};
+    return GoalResult{end <= 0.01,
+                      format("ends %.4f m from the origin run", end) +
+                          format(" (drift on the way %.3f m)", drift),
+                      {end, drift}};
   };
   return s;
 }
@@ -435,7 +445,7 @@ Scene crowdIntoWall() {
     double jitter = 0;
     for (std::size_t b = 0; b < run[0].size(); ++b)
       jitter = std::max(jitter, lineFitResidual(run, b, run.size() - 30));
-    return GoalResult{jitter < 0.01, format("jitter %.4f m", jitter)};
+    return GoalResult{jitter < 0.01, format("jitter %.4f m", jitter), {jitter}};
   };
   return s;
 }
@@ -528,9 +538,10 @@ Scene packedRoom() {
     double jitter = 0;
     for (std::size_t b = 0; b < run[0].size(); ++b)
       jitter = std::max(jitter, lineFitResidual(run, b, run.size() - 30));
-    return GoalResult{escaped == 0 && jitter < 0.01, std::to_string(escaped) +
-                                                         " body-frames out of the room" +
-                                                         format(", jitter %.4f m", jitter)};
+    return GoalResult{escaped == 0 && jitter < 0.01,
+                      std::to_string(escaped) + " body-frames out of the room" +
+                          format(", jitter %.4f m", jitter),
+                      {double(escaped), jitter}};
   };
   return s;
 }
@@ -552,8 +563,8 @@ RunFigures simulate(const World& world, const Scene& scene, CollisionMethod meth
   std::vector<Vec3> forces(bodies.size());
   std::vector<StepReport> reports(bodies.size());
   StepScratch scratch;
-  SweepScratch oracleScratch;
-  std::vector<std::uint32_t> candidates;
+  const std::optional<oracle::LevelTriangles> judged =
+      measure ? std::optional<oracle::LevelTriangles>(world) : std::nullopt;
   auto positions = [&] {
     std::vector<Vec3> p;
     for (const Body& b : bodies) p.push_back(b.position);
@@ -570,8 +581,7 @@ RunFigures simulate(const World& world, const Scene& scene, CollisionMethod meth
       const Vec3 moved = bodies[i].position - before[i];
       out.stuck += forces[i].squaredNorm() > 0 && std::hypot(moved.x(), moved.z()) < 1e-3f;
       if (!measure) continue;
-      out.penetration.push_back(oracle::penetration(world, bodies[i].position, bodies[i].radii,
-                                                    oracleScratch, candidates));
+      out.penetration.push_back(oracle::penetration(*judged, bodies[i].position, bodies[i].radii));
       out.insideSolid += oracle::insideClosedMesh(world, bodies[i].position);
     }
   }

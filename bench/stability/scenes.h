@@ -25,10 +25,13 @@ namespace bspf::stability {
 /// being the start.
 using Trajectory = std::vector<std::vector<Vec3>>;
 
-/// Whether a run met its scene's goal, and the measured figure that decided.
+/// Whether a run met its scene's goal, and the measured figures that decided.
 struct GoalResult {
   bool met = false;
   std::string detail;  ///< e.g. "max deviation from the open-floor run 0.31 m"
+  /// The figures the detail prints, in its order and units, unrounded: what
+  /// the tests bound for the cases documented as failing.
+  std::vector<double> figures;
 };
 
 struct Scene {

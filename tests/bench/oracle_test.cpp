@@ -25,12 +25,9 @@ struct Compiled {
 TEST_CASE("the oracle measures an ellipsoid's penetration as a fraction of its size",
           "[bench][oracle]") {
   const Compiled floor(bspf::test::boxMesh({-5, -1, -5}, {5, 0, 5}));
-  bspf::SweepScratch scratch;
-  std::vector<std::uint32_t> candidates;
+  const bspf::oracle::LevelTriangles judged(floor.world);
   const bspf::EllipsoidRadii radii{0.45f, 0.85f};
-  auto depth = [&](const Vec3& c) {
-    return bspf::oracle::penetration(floor.world, c, radii, scratch, candidates);
-  };
+  auto depth = [&](const Vec3& c) { return bspf::oracle::penetration(judged, c, radii); };
   CHECK(depth({0, 2, 0}) == 0);                                  // clear
   CHECK(depth({0, 0.85f, 0}) == Approx(0).margin(1e-6));         // touching
   CHECK(depth({0, 0.425f, 0}) == Approx(0.5).margin(1e-6));      // half way in
@@ -74,14 +71,12 @@ TEST_CASE("no walker ever penetrates the arena's surfaces, with either narrow ph
       const std::vector<Vec3> starts =
           bspf::walkers::startsFromSpawns(spawns.points, options.agents);
       bspf::walkers::Simulation sim(arena, starts, options);
-      bspf::SweepScratch scratch;
-      std::vector<std::uint32_t> candidates;
+      const bspf::oracle::LevelTriangles judged(arena);
       std::vector<double> depths;
       for (int f = 0; f < options.frames; ++f) {
         sim.step();
         for (const bspf::Body& b : sim.bodies())
-          depths.push_back(
-              bspf::oracle::penetration(arena, b.position, b.radii, scratch, candidates));
+          depths.push_back(bspf::oracle::penetration(judged, b.position, b.radii));
       }
       const double worst = *std::max_element(depths.begin(), depths.end());
       const double p99 = bspf::oracle::quantile(depths, 0.99);

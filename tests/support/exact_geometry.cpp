@@ -3,6 +3,8 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 
+#include "reference_geometry.h"
+
 namespace bspf::test {
 
 using V = Eigen::Vector3d;
@@ -47,8 +49,8 @@ bool segmentCrossesTriangle(const V& p0, const V& p1, const V& a, const V& b, co
 
 double segmentTriangleDistance2(const V& p0, const V& p1, const V& a, const V& b, const V& c) {
   if (segmentCrossesTriangle(p0, p1, a, b, c)) return 0;
-  double best = (closestPointOnTriangle(p0, a, b, c) - p0).squaredNorm();
-  best = std::min(best, (closestPointOnTriangle(p1, a, b, c) - p1).squaredNorm());
+  double best = (reference::closestPointOnTriangle(p0, a, b, c) - p0).squaredNorm();
+  best = std::min(best, (reference::closestPointOnTriangle(p1, a, b, c) - p1).squaredNorm());
   best = std::min(best, segmentSegmentDistance2(p0, p1, a, b));
   best = std::min(best, segmentSegmentDistance2(p0, p1, b, c));
   best = std::min(best, segmentSegmentDistance2(p0, p1, c, a));

@@ -1,5 +1,6 @@
 // Exact reference geometry for tests (double precision, no tolerances): the
-// oracle the runtime's fast paths are checked against.
+// oracle the runtime's fast paths are checked against. Built on
+// samples/reference_geometry.h, never on the runtime's own geometry.
 #pragma once
 
 #include <bspf/geometry.h>
@@ -8,8 +9,8 @@
 
 namespace bspf::test {
 
-// Closest points on triangles: bspf::closestPointOnTriangle (geometry.h),
-// used here in double precision.
+// Closest points on triangles: bspf::reference::closestPointOnTriangle
+// (samples/reference_geometry.h).
 
 /// Squared distance between segments p0p1 and q0q1.
 double segmentSegmentDistance2(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,

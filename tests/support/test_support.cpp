@@ -4,11 +4,24 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
 
 namespace bspf::test {
+
+std::filesystem::path sharedLevelsDir() {
+  if (const char* fromEnvironment = std::getenv("BSPF_SHARED_LEVELS")) return fromEnvironment;
+  const std::filesystem::path besideSources = BSPF_SHARED_LEVELS_DIR;
+  if (std::filesystem::exists(besideSources)) return besideSources;
+  // A project folder (sources and build/ inside) moved since the build:
+  // PROJECT/build/tests/bspf_tests, levels in PROJECT/../shared/levels.
+  std::error_code error;
+  const std::filesystem::path executable = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (error) return besideSources;
+  return executable.parent_path() / "../../../shared/levels";
+}
 
 bspc::Mesh boxMesh(const Eigen::Vector3d& low, const Eigen::Vector3d& high) {
   bspc::Mesh m;

@@ -16,8 +16,11 @@
 namespace bspf::test {
 
 inline std::filesystem::path samplesDir() { return BSPF_SAMPLES_DIR; }
-/// ../shared/levels beside the project; may be absent on a user's clone.
-inline std::filesystem::path sharedLevelsDir() { return BSPF_SHARED_LEVELS_DIR; }
+/// The real levels: $BSPF_SHARED_LEVELS when set (even to a missing folder,
+/// which hides them), else ../shared/levels beside the source tree, else
+/// beside the build tree holding this executable. May be absent on a user's
+/// clone.
+std::filesystem::path sharedLevelsDir();
 inline std::filesystem::path bspcExecutable() { return BSPC_EXECUTABLE; }
 
 /// The six shared levels, smallest first.
@@ -72,13 +75,19 @@ CommandResult run(const std::string& command);
 
 }  // namespace bspf::test
 
-/// In a Catch2 test: returns from the test, with a warning, when
-/// ../shared/levels is absent (a user's clone has none).
-#define BSPF_SKIP_WITHOUT_SHARED_LEVELS()                                  \
-  do {                                                                     \
-    if (!std::filesystem::exists(bspf::test::sharedLevelsDir())) {         \
-      WARN("skipped: " << bspf::test::sharedLevelsDir()                    \
-                       << " is absent (a user's clone has no ../shared)"); \
-      return;                                                              \
-    }                                                                      \
+/// What a skipped test prints (ctest's SKIP_REGULAR_EXPRESSION for the tests,
+/// set in tests/CMakeLists.txt, matches it and reports the test as skipped).
+#define BSPF_SKIPPED_MARKER "BSPF_TEST_SKIPPED"
+
+/// In a Catch2 test: returns from the test, with a warning (printed even when
+/// the test passes) that ctest reads as a skip, when the shared levels are
+/// absent (a user's clone has none).
+#define BSPF_SKIP_WITHOUT_SHARED_LEVELS()                                           \
+  do {                                                                              \
+    if (!std::filesystem::exists(bspf::test::sharedLevelsDir())) {                  \
+      WARN(BSPF_SKIPPED_MARKER ": " << bspf::test::sharedLevelsDir()                \
+                                    << " is absent (set BSPF_SHARED_LEVELS to the " \
+                                       "folder of the real levels)");               \
+      return;                                                                       \
+    }                                                                               \
   } while (false)
