@@ -5,6 +5,7 @@
 //
 //   bspf_sweep [--out FILE] [--quick] [--agents N] [--frames F] [--repeats R]
 //              [--seed K] [--samples DIR] [--shared DIR] [--level NAME]...
+//              [--obj FILE]... [--default-only] [--method planes|exact|bullet]...
 //
 // Every level's OBJ is compiled in memory (bspc's library) for each leaf size
 // tried. A crowd random-walks as in the walkers sample (same random streams
@@ -77,16 +78,23 @@ struct Config {
   float dt = kDefaultDt;
 };
 
-std::vector<Config> makeConfigs(bool quick, bool withBullet) {
+// The configurations to run: every knob varied, fewer with `quick`, none
+// with `defaultOnly`; only the methods named in `methods` (all when empty).
+std::vector<Config> makeConfigs(bool quick, bool defaultOnly, bool withBullet,
+                                const std::vector<std::string>& methods) {
   std::vector<Config> configs;
   for (const Method method : {Method::Planes, Method::Exact, Method::Bullet}) {
     if (method == Method::Bullet && !withBullet) continue;
+    if (!methods.empty() &&
+        std::find(methods.begin(), methods.end(), methodName(method)) == methods.end())
+      continue;
     Config base;
     base.method = method;
     base.settings.method = method == Method::Planes ? bspf::CollisionMethod::Planes
                                                     : bspf::CollisionMethod::ExactSweep;
     base.settings.maxHorizontalSpeed = kSpeed;
     configs.push_back(base);
+    if (defaultOnly) continue;
     auto vary = [&](const char* knob, const std::string& value, auto&& change) {
       Config c = base;
       c.knob = knob;
@@ -264,7 +272,10 @@ Level loadLevel(const fs::path& obj) {
   const bspf::walkers::Points spawns = bspf::walkers::loadSpawns(base.string() + ".spawns.txt");
   if (!spawns) throw std::runtime_error(spawns.error);
   level.spawns = spawns.points;
-  level.brushes = bspf::walkers::BrushSet::load(base.string() + ".brushes.txt");
+  // Levels not built from brushes (--obj) may have no brush file: no
+  // solid is then counted as entered.
+  const fs::path brushes = base.string() + ".brushes.txt";
+  if (fs::exists(brushes)) level.brushes = bspf::walkers::BrushSet::load(brushes);
   return level;
 }
 
@@ -276,8 +287,8 @@ int main(int argc, char** argv) {
   std::string outPath = "speed-accuracy.csv", samplesDir = BSPF_SAMPLES_DIR,
               sharedDir = std::getenv("BSPF_SHARED_LEVELS") ? std::getenv("BSPF_SHARED_LEVELS")
                                                             : BSPF_SHARED_LEVELS_DIR;
-  std::vector<std::string> only;
-  bool quick = false;
+  std::vector<std::string> only, extraObjs, methods;
+  bool quick = false, defaultOnly = false;
   int agents = 32, frames = 300, repeats = 3;
   std::uint64_t seed = 1;
   app.add_option("--out", outPath, "The CSV to write")->capture_default_str();
@@ -297,6 +308,13 @@ int main(int argc, char** argv) {
   app.add_option("--shared", sharedDir, "Folder of the shared levels (skipped when absent)")
       ->capture_default_str();
   app.add_option("--level", only, "Only these levels (by name; repeatable)");
+  app.add_option("--obj", extraObjs,
+                 "Also this level (an OBJ with NAME.spawns.txt beside it, NAME.brushes.txt "
+                 "optional; repeatable)")
+      ->check(CLI::ExistingFile);
+  app.add_flag("--default-only", defaultOnly, "Only the default settings, no knob varied");
+  app.add_option("--method", methods, "Only these methods (repeatable)")
+      ->check(CLI::IsMember({"planes", "exact", "bullet"}));
   CLI11_PARSE(app, argc, argv);
   if (quick) {
     agents = 16;
@@ -320,6 +338,7 @@ int main(int argc, char** argv) {
   } else {
     std::printf("bspf_sweep: %s not found: sample levels only\n", sharedDir.c_str());
   }
+  for (const std::string& obj : extraObjs) objs.push_back(obj);
   if (!only.empty())
     std::erase_if(objs, [&](const fs::path& p) {
       return std::find(only.begin(), only.end(), p.stem().string()) == only.end();
@@ -329,7 +348,11 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  const std::vector<Config> configs = makeConfigs(quick, withBullet);
+  const std::vector<Config> configs = makeConfigs(quick, defaultOnly, withBullet, methods);
+  if (configs.empty()) {
+    std::fprintf(stderr, "bspf_sweep: error: no method selected is built\n");
+    return 2;
+  }
   std::vector<std::string> rows;
   std::vector<Result> pooled(configs.size());
   std::vector<std::vector<double>> levelNs(configs.size());

@@ -129,16 +129,9 @@ int main(int argc, char** argv) {
     }
   }
 
-  bspf::walkers::Points starts;
-  if (!spawnsPath.empty()) {
-    const bspf::walkers::Points spawns = bspf::walkers::loadSpawns(spawnsPath);
-    if (!spawns) return fail(spawns.error);
-    starts.points = bspf::walkers::startsFromSpawns(spawns.points, options.agents);
-  } else {
-    starts =
-        bspf::walkers::placeOnFloor(world, options.agents, options.radii, options.seed, levelPath);
-    if (!starts) return fail(starts.error);
-  }
+  const bspf::walkers::Points starts =
+      bspf::walkers::placeAgents(world, options, spawnsPath, levelPath);
+  if (!starts) return fail(starts.error);
 
   // The trace goes to OUT.tmp and is renamed over OUT once complete.
   std::ofstream trace;

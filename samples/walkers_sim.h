@@ -313,6 +313,18 @@ inline Points placeOnFloor(const World& world, int agents, EllipsoidRadii radii,
   return result;
 }
 
+/// Start centres for options.agents agents: from the spawn file `spawnsPath`
+/// (startsFromSpawns) or, when it is empty, on open walkable floor
+/// (placeOnFloor, named `levelName` in errors).
+inline Points placeAgents(const World& world, const Options& options, const std::string& spawnsPath,
+                          const std::string& levelName) {
+  if (spawnsPath.empty())
+    return placeOnFloor(world, options.agents, options.radii, options.seed, levelName);
+  Points spawns = loadSpawns(spawnsPath);
+  if (spawns) spawns.points = startsFromSpawns(spawns.points, options.agents);
+  return spawns;
+}
+
 /// How deep, metres, a centre must be inside a solid to count as inside: a
 /// body resting on a face is within float noise of it, not inside.
 inline constexpr float kInsideMargin = 1e-3f;
