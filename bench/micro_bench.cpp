@@ -37,6 +37,7 @@
 #include "narrow_phase.h"
 #include "support/mesh_blob.h"
 #include "walkers_sim.h"
+#include "workspace.h"
 
 namespace {
 
@@ -61,7 +62,7 @@ struct PreCheckInput {
 };
 
 struct PointInput {
-  const bspf::schema::TrianglePlanes* planes;
+  bspf::detail::PlanesCandidate candidate;  // the six planes grown for kRadii
   Vec3 point;
 };
 
@@ -132,6 +133,9 @@ void gatherInputs(Level& level) {
     collectCandidateTriangles(world, m.from, m.to, kRadii, scratch, candidates);
     for (const std::uint32_t t : candidates) {
       const bspf::schema::TrianglePlanes& planes = world.trianglePlanes()[t];
+      bspf::detail::PlanesCandidate grown =
+          bspf::detail::makePlanesCandidate(world, {t, Vec3::Zero(), Vec3::Zero()}, kRadii);
+      bspf::detail::growPlanes(world, kRadii, grown);
       level.preChecks.push_back({&planes.face(), m.from, m.to});
       // The points findBlockingTriangle tests.
       const bspf::detail::SideValues sides =
@@ -139,10 +143,10 @@ void gatherInputs(Level& level) {
       if (!bspf::detail::passesPreCheck(sides)) continue;
       if (sides.startSide >= sides.reach) {
         const float f = (sides.startSide - sides.reach) / (sides.startSide - sides.endSide);
-        level.points.push_back({&planes, m.from + f * (m.to - m.from)});
+        level.points.push_back({grown, m.from + f * (m.to - m.from)});
       } else {
-        level.points.push_back({&planes, m.from});
-        level.points.push_back({&planes, m.to});
+        level.points.push_back({grown, m.from});
+        level.points.push_back({grown, m.to});
       }
     }
   }
@@ -217,7 +221,7 @@ void preCheck(benchmark::State& state, const Level& level) {
 
 void insideGrownTriangle(benchmark::State& state, const Level& level) {
   cycle(state, level.points, [](const PointInput& x) {
-    bool inside = bspf::detail::insideGrownTriangle(*x.planes, x.point, kRadii);
+    bool inside = x.candidate.insideGrown(x.point);
     benchmark::DoNotOptimize(inside);
   });
 }

@@ -9,20 +9,20 @@
 // or placed on walkable floor without them) runs once, recording every body's
 // state and input force just before each frame's stepBodies. Those steps are
 // then replayed with stepBody alone (no body-against-body pushes), from copies
-// of the recorded states with one StepScratch:
+// of the recorded states with one StepScratch, each agent's own nearby
+// triangles swapped in for its steps, as stepBodies does:
 //   - timed: every recorded step in order, --repeats times; the median of the
 //     repeats' ns per step;
 //   - measured, untimed, in one more replay: tree queries per step
-//     (NearbyTriangles::queries), the candidates the step's last query listed
-//     (NearbyTriangles::list after the step: exact for the steps that queried
-//     once, which the fraction multi_query_steps says how close to all they
-//     are), and, by brute force over every triangle's bounding box, the
-//     triangles whose box overlaps the unpadded box of the ellipsoid swept
-//     from the step's start to its desired end (position + the velocity of
-//     the runtime's own velocity model times dt: the move the step asks of
-//     the level before any slide; the end the step reached would leave out
-//     the surfaces it rests on, which keep it a skin away). The
-//     brute force runs on every k-th step, k chosen so that at most
+//     (NearbyTriangles::queries: most steps reuse the agent's last query), the
+//     candidates the narrow phase tested in the step's last slide
+//     (StepScratch::lastSlideCandidates after the step; multi_query_steps is the
+//     fraction of steps that queried the tree more than once), and, by brute force over every
+//     triangle's bounding box, the triangles whose box overlaps the unpadded box of the ellipsoid
+//     swept from the step's start to its desired end (position + the velocity of the runtime's own
+//     velocity model times dt: the move the step asks of the level before any slide; the end the
+//     step reached would leave out the surfaces it rests on, which keep it a skin away). The brute
+//     force runs on every k-th step, k chosen so that at most
 //     --brute-force-budget box tests are made; the ratio candidates /
 //     overlapping is over those steps.
 // Prints a Markdown table (a row per method) or, with --json, one JSON object.
@@ -55,13 +55,15 @@ struct RecordedStep {
 };
 
 struct Recording {
-  std::vector<RecordedStep> steps;
+  std::vector<RecordedStep> steps;  // frame by frame, agents in order
+  std::size_t agents = 0;
   long long refusedMoves = 0;  // in the recorded crowd run
 };
 
 Recording recordCrowd(const World& world, std::span<const Vec3> starts,
                       const bspf::walkers::Options& options) {
   Recording recording;
+  recording.agents = starts.size();
   recording.steps.reserve(std::size_t(options.agents) * std::size_t(options.frames));
   bspf::walkers::Simulation crowd(world, starts, options);
   for (int frame = 0; frame < options.frames; ++frame)
@@ -79,6 +81,16 @@ double median(std::vector<double> values) {
   return values.size() % 2 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
 }
 
+// Replays recorded step `i` with stepBody, the agent's own nearby triangles
+// swapped into the scratch as stepBodies does.
+void replayStep(const World& world, const Recording& recording, std::size_t i, float dt, Body& body,
+                bspf::StepScratch& scratch, std::vector<bspf::NearbyTriangles>& agentNearby) {
+  bspf::NearbyTriangles& own = agentNearby[i % recording.agents];
+  std::swap(scratch.nearby, own);
+  bspf::stepBody(world, body, recording.steps[i].force, dt, scratch);
+  std::swap(scratch.nearby, own);
+}
+
 // The median over `repeats` replays of every recorded step, ns per step.
 double timeReplay(const World& world, const Recording& recording, float dt, int repeats) {
   std::vector<Body> bodies(recording.steps.size());
@@ -86,9 +98,10 @@ double timeReplay(const World& world, const Recording& recording, float dt, int 
   std::vector<double> nsPerStep;
   for (int repeat = 0; repeat < repeats; ++repeat) {
     for (std::size_t i = 0; i < bodies.size(); ++i) bodies[i] = recording.steps[i].body;
+    std::vector<bspf::NearbyTriangles> agentNearby(recording.agents);
     const auto start = std::chrono::steady_clock::now();
     for (std::size_t i = 0; i < bodies.size(); ++i)
-      bspf::stepBody(world, bodies[i], recording.steps[i].force, dt, scratch);
+      replayStep(world, recording, i, dt, bodies[i], scratch, agentNearby);
     const auto stop = std::chrono::steady_clock::now();
     nsPerStep.push_back(std::chrono::duration<double, std::nano>(stop - start).count() /
                         double(bodies.size()));
@@ -143,6 +156,7 @@ QueryFigures measureQueries(const World& world, const Recording& recording, floa
       1,
       static_cast<long long>(std::ceil(double(steps) * double(boxes.size()) / bruteForceBudget)));
   bspf::StepScratch scratch;
+  std::vector<bspf::NearbyTriangles> agentNearby(recording.agents);
   std::vector<double> candidates;
   long long queries = 0, multiQuery = 0;
   double sampledCandidates = 0, sampledOverlapping = 0, ratioSum = 0;
@@ -150,13 +164,13 @@ QueryFigures measureQueries(const World& world, const Recording& recording, floa
   for (long long i = 0; i < steps; ++i) {
     const RecordedStep& recorded = recording.steps[std::size_t(i)];
     Body body = recorded.body;
-    const std::uint64_t before = scratch.nearby.queries();
-    bspf::stepBody(world, body, recorded.force, dt, scratch);
-    const std::uint64_t made = scratch.nearby.queries() - before;
+    const bspf::NearbyTriangles& own = agentNearby[std::size_t(i) % recording.agents];
+    const std::uint64_t before = own.queries();
+    replayStep(world, recording, std::size_t(i), dt, body, scratch, agentNearby);
+    const std::uint64_t made = own.queries() - before;
     queries += static_cast<long long>(made);
     multiQuery += made > 1;
-    if (made == 0) continue;  // nothing listed this step
-    const double listed = double(scratch.nearby.list().size());
+    const double listed = double(scratch.lastSlideCandidates());
     candidates.push_back(listed);
     if (i % figures.bruteForceEvery != 0) continue;
     Body moved = recorded.body;

@@ -105,6 +105,17 @@ Triangle sphereSpaceTriangle(const World& world, std::uint32_t t, const Vec3& to
   return out;
 }
 
+ExactCandidate makeExactCandidate(const World& world, const CandidateTriangle& c,
+                                  EllipsoidRadii radii, const Vec3& toSphere) {
+  const schema::Plane& face = world.trianglePlanes()[c.triangle].face();
+  const Vec3 normal = toVec3(face.normal());
+  // The reach is padded so float rounding in the pre-check never drops a
+  // triangle the sphere touches.
+  return {c.low, c.high, c.triangle,
+          FaceTest{normal, face.distance(), effectiveRadius(normal, radii) * 1.0001f + 1e-5f},
+          sphereSpaceTriangle(world, c.triangle, toSphere)};
+}
+
 }  // namespace detail
 
 namespace {
@@ -128,21 +139,20 @@ void addContact(SlideResult& result, const Vec3& normal, float walkableNormalY, 
 // Pushes a centre that starts within the unit distance of triangles (in
 // front of them: penetration) out along each closest-point direction, to
 // 1 + padding, in up to 8 rounds.
+// `local` is the slide's own candidate list (LocalCandidates).
 void recoverFromPenetration(const World& world, Vec3& p, const Vec3& toSphere, float padding,
                             float walkableNormalY, EllipsoidRadii radii, float moveLength,
-                            StepScratch& scratch, SlideResult& result) {
+                            auto& local, StepScratch& scratch, SlideResult& result) {
   // Gauss-Seidel: each round pushes out of every penetrated triangle in
   // turn, so a body wedged in a crease leaves it along the bisector instead
   // of bouncing between the two sides.
   for (int round = 0; round < 8; ++round) {
     const Vec3 centre = p.cwiseQuotient(toSphere);
     const Bounds here = sweptBounds(centre, centre, radii);
-    LocalCandidates local;
     bool pushed = false;
-    for (const CandidateTriangle& candidate : local.around(world, here, moveLength, scratch)) {
+    for (const detail::ExactCandidate& candidate : local.around(world, here, moveLength, scratch)) {
       if (!boxesOverlap(candidate.low, candidate.high, here.low, here.high)) continue;
-      const std::uint32_t t = candidate.triangle;
-      const Triangle tri = sphereSpaceTriangle(world, t, toSphere);
+      const Triangle& tri = candidate.sphere;
       if (tri.normal.dot(p - tri.a) < 0) continue;
       const Vec3 offset = p - closestPointOnTriangle<Vec3>(p, tri.a, tri.b, tri.c);
       const float distance = offset.norm();
@@ -172,7 +182,9 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
   int planeCount = 0;
   bool recovered = false;
   const float moveLength = (desiredEnd - start).norm();
-  LocalCandidates local;
+  LocalCandidates local(scratch.workspace().exact, [&](const CandidateTriangle& c) {
+    return detail::makeExactCandidate(world, c, radii, toSphere);
+  });
   for (int iteration = 0;; ++iteration) {
     if (move.squaredNorm() < 1e-14f) break;
     const Vec3 from = p.cwiseQuotient(toSphere);
@@ -180,23 +192,24 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     const Bounds swept = sweptBounds(from, to, radii);
     Impact impact;
     bool penetrating = false;
-    for (const CandidateTriangle& candidate : local.around(world, swept, moveLength, scratch)) {
+    for (const detail::ExactCandidate& candidate :
+         local.around(world, swept, moveLength, scratch)) {
       if (!boxesOverlap(candidate.low, candidate.high, swept.low, swept.high)) continue;
-      const std::uint32_t t = candidate.triangle;
       // The side-value pre-check on the stored face plane: a path that stays
       // more than the body's extent in front of the plane, or starts behind
       // it, cannot touch the triangle.
-      const schema::Plane& face = world.trianglePlanes()[t].face();
-      const float reach = effectiveRadius(face.normal(), radii) * 1.0001f + 1e-5f;
-      const float startSide = signedDistance(face, from);
-      if (startSide < -1e-5f || std::min(startSide, signedDistance(face, to)) > reach) continue;
-      earliestImpact(sphereSpaceTriangle(world, t, toSphere), p, move, impact, penetrating);
+      const detail::FaceTest& face = candidate.face;
+      const float startSide = face.normal.dot(from) - face.distance;
+      if (startSide < -1e-5f ||
+          std::min(startSide, face.normal.dot(to) - face.distance) > face.reach)
+        continue;
+      earliestImpact(candidate.sphere, p, move, impact, penetrating);
     }
     // A start in penetration (pushed there by another body, or placed there)
     // is first moved out, then the sweep is made again from there.
     if (penetrating && iteration == 0 && !recovered) {
       recovered = true;
-      recoverFromPenetration(world, p, toSphere, padding, walkableNormalY, radii, moveLength,
+      recoverFromPenetration(world, p, toSphere, padding, walkableNormalY, radii, moveLength, local,
                              scratch, result);
       --iteration;
       continue;

@@ -13,6 +13,21 @@
 
 namespace bspf {
 
+StepScratch::StepScratch() = default;
+StepScratch::~StepScratch() = default;
+StepScratch::StepScratch(StepScratch&&) noexcept = default;
+StepScratch& StepScratch::operator=(StepScratch&&) noexcept = default;
+
+detail::StepWorkspace& StepScratch::workspace() {
+  // Made on first use, so a default-constructed or moved-from scratch works.
+  if (!workspace_) workspace_ = std::make_unique<detail::StepWorkspace>();
+  return *workspace_;
+}
+
+std::size_t StepScratch::lastSlideCandidates() const {
+  return workspace_ ? workspace_->lastCount : 0;
+}
+
 SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,
                               EllipsoidRadii radii, const MovementSettings& settings,
                               float walkableNormalY, StepScratch& scratch) {

@@ -12,7 +12,7 @@
 
 namespace bspf::detail {
 
-// ---- CollisionMethod::Planes (movement.cpp) ----
+// ---- CollisionMethod::Planes (planes_slide.cpp; the six planes: workspace.h) ----
 
 /// The side values of the move start -> end against a triangle's stored face
 /// plane: the body's extent along the face normal and the signed distances
@@ -36,21 +36,6 @@ inline SideValues sideValues(const schema::Plane& face, const Vec3& start, const
 // starts within the offset plane, which that test lets pass through.
 inline bool passesPreCheck(const SideValues& s) {
   return !(s.endSide >= s.reach || s.startSide < 0);
-}
-
-// Whether the centre point `p`, projected onto triangle `planes`' face, lies
-// inside the triangle grown by the body: all six perpendicular planes, each
-// pushed out by the body's extent along that plane's own normal (a local
-// offset; the stored plane is never modified, the article's second defect).
-inline bool insideGrownTriangle(const schema::TrianglePlanes& planes, const Vec3& p,
-                                EllipsoidRadii radii) {
-  for (int k = 0; k < 3; ++k) {
-    const schema::Plane& edge = *planes.edges()->Get(k);
-    if (signedDistance(edge, p) + effectiveRadius(edge.normal(), radii) < 0) return false;
-    const schema::Plane& cap = *planes.caps()->Get(k);
-    if (signedDistance(cap, p) + effectiveRadius(cap.normal(), radii) < 0) return false;
-  }
-  return true;
 }
 
 // ---- CollisionMethod::ExactSweep (exact_sweep.cpp), in sphere space ----

@@ -21,35 +21,34 @@ struct Hit {
 // value, if any.
 std::optional<Hit> findBlockingTriangle(const World& world, const Vec3& start, const Vec3& end,
                                         EllipsoidRadii radii, const Bounds& swept,
-                                        std::span<const CandidateTriangle> nearby) {
+                                        std::span<detail::PlanesCandidate> candidates) {
   const Vec3 move = end - start;
   const float moveLength = move.norm();
   const Vec3 direction = moveLength > 0 ? Vec3(move / moveLength) : Vec3::Zero();
   std::optional<Hit> best;
-  for (const CandidateTriangle& candidate : nearby) {
-    // The boxes are in the list itself: candidates stop here without their
-    // 112-byte plane record being fetched.
+  for (detail::PlanesCandidate& candidate : candidates) {
+    // The cheapest test first: the box, then the pre-check's two dot
+    // products, and only then the six planes.
     if (!boxesOverlap(candidate.low, candidate.high, swept.low, swept.high)) continue;
-    const std::uint32_t t = candidate.triangle;
-    const schema::TrianglePlanes& planes = world.trianglePlanes()[t];
-    const schema::Plane& face = planes.face();
-    const detail::SideValues sides = detail::sideValues(face, start, end, radii);
-    if (!detail::passesPreCheck(sides)) continue;
-    const auto [reach, startSide, endSide] = sides;
+    const detail::FaceTest& face = candidate.face;
+    const float startSide = face.normal.dot(start) - face.distance;
+    const float endSide = face.normal.dot(end) - face.distance;
+    if (!detail::passesPreCheck({face.reach, startSide, endSide})) continue;
+    if (!candidate.grownReady) detail::growPlanes(world, radii, candidate);
     // Test the six planes where the centre crosses the offset plane (the
     // article leaves this position unspecified: testing the end lets fast
     // bodies skip small triangles). A body already within it is tested at
     // its start and at its end.
     bool inside;
-    if (startSide >= reach) {
-      const float t = (startSide - reach) / (startSide - endSide);
-      inside = detail::insideGrownTriangle(planes, start + t * move, radii);
+    if (startSide >= face.reach) {
+      const float f = (startSide - face.reach) / (startSide - endSide);
+      inside = candidate.insideGrown(start + f * move);
     } else {
-      inside = detail::insideGrownTriangle(planes, start, radii) ||
-               detail::insideGrownTriangle(planes, end, radii);
+      inside = candidate.insideGrown(start) || candidate.insideGrown(end);
     }
     if (!inside) continue;
-    const float facing = toVec3(face.normal()).dot(direction);
+    const float facing = face.normal.dot(direction);
+    const std::uint32_t t = candidate.triangle;
     if (!best || facing < best->facing || (facing == best->facing && t < best->triangle))
       best = Hit{t, facing};
   }
@@ -100,6 +99,37 @@ bool meetConstraints(const std::array<const Constraint*, N>& set, float maxShift
 // use up the iterations and refuse the move.
 }  // namespace
 
+namespace detail {
+
+PlanesCandidate makePlanesCandidate(const World& world, const CandidateTriangle& c,
+                                    EllipsoidRadii radii) {
+  const schema::Plane& face = world.trianglePlanes()[c.triangle].face();
+  const Vec3 normal = toVec3(face.normal());
+  PlanesCandidate out;
+  out.low = c.low;
+  out.high = c.high;
+  out.triangle = c.triangle;
+  out.face = {normal, face.distance(), effectiveRadius(normal, radii)};
+  return out;
+}
+
+void growPlanes(const World& world, EllipsoidRadii radii, PlanesCandidate& c) {
+  const schema::TrianglePlanes& planes = world.trianglePlanes()[c.triangle];
+  // Each perpendicular plane pushed out by the body's extent along its own
+  // normal (a local offset; the stored plane is never modified, the
+  // article's second defect).
+  for (int k = 0; k < 3; ++k) {
+    for (const auto& [plane, slot] :
+         {std::pair{planes.edges()->Get(k), 2 * k}, std::pair{planes.caps()->Get(k), 2 * k + 1}}) {
+      const Vec3 n = toVec3(plane->normal());
+      c.grown[slot] << n, plane->distance() - effectiveRadius(n, radii);
+    }
+  }
+  c.grownReady = true;
+}
+
+}  // namespace detail
+
 SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& desiredEnd,
                             EllipsoidRadii radii, const MovementSettings& settings,
                             float walkableNormalY, StepScratch& scratch) {
@@ -111,7 +141,9 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
   // plus the body's size.
   const float maxShift = (desiredEnd - start).norm() + std::max(radii.xz, radii.y);
   const float moveLength = (desiredEnd - start).norm();
-  LocalCandidates local;
+  LocalCandidates local(scratch.workspace().planes, [&](const CandidateTriangle& c) {
+    return detail::makePlanesCandidate(world, c, radii);
+  });
   for (int iteration = 0;; ++iteration) {
     const Bounds swept = sweptBounds(start, result.end, radii);
     const std::optional<Hit> hit = findBlockingTriangle(

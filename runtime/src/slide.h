@@ -9,6 +9,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "workspace.h"
+
 namespace bspf {
 
 struct Contact {
@@ -45,31 +47,37 @@ inline float nearbyPad(float moveLength) { return 2.0f * moveLength + 0.1f; }
 
 /// The triangles one slide's iterations test: the body's nearby triangles
 /// (StepScratch::nearby) whose box overlaps a local box around the slide,
-/// copied into StepScratch::slideCandidates, a short list each iteration
-/// scans. Filled again only when an iteration's swept box leaves the local
-/// box (a slide moves the end by about the move's length at most).
+/// each made into a `Candidate` (its tests precomputed for the body) in
+/// `list`, a short array every iteration scans. Made again only when an
+/// iteration's swept box leaves the local box (a slide moves the end by
+/// about the move's length at most).
+template <typename Candidate, typename Make>
 class LocalCandidates {
  public:
+  LocalCandidates(std::vector<Candidate>& list, Make make) : list_(list), make_(make) {}
+
   /// Candidates whose box may overlap `swept` (filter by it: the list holds
   /// more). `moveLength`, metres, sizes the local box and the tree query.
-  std::span<const CandidateTriangle> around(const World& world, const Bounds& swept,
-                                            float moveLength, StepScratch& scratch) {
+  std::span<Candidate> around(const World& world, const Bounds& swept, float moveLength,
+                              StepScratch& scratch) {
     if (!valid_ || !(swept.low.array() >= local_.low.array()).all() ||
         !(swept.high.array() <= local_.high.array()).all()) {
       valid_ = true;
-      const Vec3 grow = Vec3::Constant(moveLength + kLocalGrowMetres);
+      const Vec3 grow = Vec3::Constant(0.25f * moveLength + kLocalGrowMetres);
       local_ = {swept.low - grow, swept.high + grow};
       scratch.nearby.cover(world, local_.low, local_.high, nearbyPad(moveLength), scratch.sweep);
-      scratch.slideCandidates.clear();
+      list_.clear();
       for (const CandidateTriangle& c : scratch.nearby.list())
-        if (boxesOverlap(c.low, c.high, local_.low, local_.high))
-          scratch.slideCandidates.push_back(c);
+        if (boxesOverlap(c.low, c.high, local_.low, local_.high)) list_.push_back(make_(c));
+      scratch.workspace().lastCount = list_.size();
     }
-    return scratch.slideCandidates;
+    return list_;
   }
 
  private:
   static constexpr float kLocalGrowMetres = 0.02f;
+  std::vector<Candidate>& list_;
+  Make make_;
   Bounds local_;
   bool valid_ = false;
 };

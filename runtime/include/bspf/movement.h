@@ -35,6 +35,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -127,20 +128,29 @@ struct StepReport {
 class StepScratch;
 namespace detail {
 void pushBodiesApart(const World&, std::span<Body>, StepScratch&, std::span<StepReport>);
-}
+struct StepWorkspace;  // the narrow phases' working lists, private to the runtime
+}  // namespace detail
 
 /// Per-thread scratch for the step. Reusable across worlds and frames; it
-/// allocates only while growing.
+/// allocates only while growing. Movable, not copyable.
 class StepScratch {
  public:
+  StepScratch();
+  ~StepScratch();
+  StepScratch(StepScratch&&) noexcept;
+  StepScratch& operator=(StepScratch&&) noexcept;
+
   SweepScratch sweep;
   /// The triangles near the body being moved (see NearbyTriangles): kept
   /// from step to step, so a body stepped alone with its own scratch reuses
   /// it over frames; stepBodies keeps one per body.
   NearbyTriangles nearby;
-  /// Working list of the narrow phases: the nearby triangles one slide
-  /// tests. Its contents between calls are unspecified.
-  std::vector<CandidateTriangle> slideCandidates;
+
+  /// How many triangles the last slide's narrow phase tested: the nearby
+  /// triangles whose box overlaps the slide's (diagnostics).
+  std::size_t lastSlideCandidates() const;
+  /// The narrow phases' working lists. Private to the runtime.
+  detail::StepWorkspace& workspace();
 
  private:
   friend void detail::pushBodiesApart(const World&, std::span<Body>, StepScratch&,
@@ -150,6 +160,7 @@ class StepScratch {
   std::vector<NearbyTriangles> bodyNearby_;  // parallel to stepBodies' bodies
   std::vector<std::uint64_t> cellKeys_;
   std::vector<std::uint32_t> order_;
+  std::unique_ptr<detail::StepWorkspace> workspace_;
 };
 
 /// Advances one body by `dt` seconds against the level. `force` is the input

@@ -1,0 +1,70 @@
+// The narrow phases' working lists (StepScratch::workspace): each slide's
+// candidates with what its tests need precomputed for the body's radii, so
+// an iteration reads one short array and takes no square root per
+// candidate. Private to the runtime.
+#pragma once
+
+#include <bspf/movement.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "narrow_phase.h"
+
+namespace bspf::detail {
+
+/// The face plane and its pre-check values for one body.
+struct FaceTest {
+  Vec3 normal;
+  float distance;
+  /// The body's extent along the normal (effectiveRadius).
+  float reach;
+};
+
+/// A triangle as the planes method tests it for one body. The six
+/// perpendicular planes pushed out by the body's extent along each are made
+/// only for the few candidates that pass the box test and the pre-check.
+struct PlanesCandidate {
+  Vec3 low, high;  ///< the triangle's box
+  std::uint32_t triangle;
+  FaceTest face;
+  bool grownReady = false;
+  /// (normal, offset): the centre is inside the grown triangle when
+  /// dot(normal, p) >= offset for all six; edges and caps interleaved.
+  std::array<Eigen::Vector4f, 6> grown;
+
+  /// Precondition: grownReady (growPlanes).
+  bool insideGrown(const Vec3& p) const {
+    for (const Eigen::Vector4f& plane : grown)
+      if (plane.head<3>().dot(p) < plane.w()) return false;
+    return true;
+  }
+};
+
+/// Fills `c.grown` for `radii` (once: sets grownReady).
+void growPlanes(const World& world, EllipsoidRadii radii, PlanesCandidate& c);
+
+/// A triangle as the exact sweep tests it for one body: in sphere space.
+struct ExactCandidate {
+  Vec3 low, high;  ///< the triangle's box, world space
+  std::uint32_t triangle;
+  FaceTest face;
+  Triangle sphere;
+};
+
+struct StepWorkspace {
+  std::vector<PlanesCandidate> planes;
+  std::vector<ExactCandidate> exact;
+  std::size_t lastCount = 0;
+};
+
+PlanesCandidate makePlanesCandidate(const World& world, const CandidateTriangle& c,
+                                    EllipsoidRadii radii);
+/// `toSphere`: (1/radii.xz, 1/radii.y, 1/radii.xz).
+ExactCandidate makeExactCandidate(const World& world, const CandidateTriangle& c,
+                                  EllipsoidRadii radii, const Vec3& toSphere);
+
+}  // namespace bspf::detail
