@@ -587,29 +587,36 @@ TEST_CASE(
 }
 
 TEST_CASE(
-    "a body pushed into a V-shaped crease or a corner of three sloped walls reaches the "
-    "point touching them all, never refused",
+    "a body pushed into a sharp V-shaped crease or a pyramid's tip reaches the point touching "
+    "every wall, never refused",
     "[runtime][movement]") {
   const bspf::CollisionMethod method = eachMethod();
   INFO("method " << nameOf(method));
-  // Walls meeting at the origin at sharp angles (not at right angles: moving
-  // out of one wall moves into the others), the body pushed along +x.
-  const Eigen::Vector3d left(-0.8, 0, 0.6), right(-0.8, 0, -0.6), roof(-0.6, -0.5, 0.1);
-  for (const bool withRoof : {false, true}) {
-    std::vector<Eigen::Vector3d> normals{left, right};
-    if (withRoof) normals.push_back(roof.normalized());
-    INFO((withRoof ? "corner of three" : "V crease"));
+  // Walls meeting at the origin, the body pushed along +x into where they
+  // meet. Their normals are more than 90 degrees apart, so moving the body
+  // out of one wall moves it into the others: a sharp wedge, and a pyramid's
+  // tip seen from inside (none of its walls walkable).
+  const double b = std::sqrt(1 - 0.4 * 0.4);
+  auto pyramidWall = [&](double degrees) {
+    const double angle = degrees * std::numbers::pi / 180;
+    return Eigen::Vector3d(-0.4, b * std::cos(angle), b * std::sin(angle));
+  };
+  for (const bool pyramid : {false, true}) {
+    const std::vector<Eigen::Vector3d> normals =
+        pyramid ? std::vector{pyramidWall(60), pyramidWall(180), pyramidWall(300)}
+                : std::vector{Eigen::Vector3d(-0.6, 0, 0.8), Eigen::Vector3d(-0.6, 0, -0.8)};
+    INFO((pyramid ? "corner of three" : "V crease"));
     bspc::Mesh mesh;
     for (const Eigen::Vector3d& n : normals) appendPlane(mesh, Eigen::Vector3d::Zero(), n);
     const Level level(mesh);
     bspf::StepScratch scratch;
-    Body body = floating({-4, withRoof ? -1.5f : 0.0f, 0.3f}, method);
+    Body body = floating({-4, pyramid ? 0.2f : 0.0f, 0.3f}, method);
     const Vec3 goal = restingCentre(normals, body.radii, body.settings.skin);
     bspf::StepReport report;
     for (int f = 0; f < 120; ++f) {
       const Vec3 towards = (goal - body.position) * 600;
       bspf::stepBody(level.world, body, Vec3(towards.x(), 0, towards.z()), kDt, scratch, &report);
-      if (withRoof) body.velocity.y() = (goal.y() - body.position.y()) * 30;
+      if (pyramid) body.velocity.y() = (goal.y() - body.position.y()) * 30;
       INFO("frame " << f << " at " << body.position.transpose());
       REQUIRE_FALSE(report.refused);
     }
