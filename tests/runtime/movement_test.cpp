@@ -427,7 +427,7 @@ bspc::Mesh corner(bool xWallFirst) {
   return mesh;
 }
 
-// A floating body (no gravity) 2 m up, clear of the floor.
+// A body without gravity, floating where it is put, free to move fast.
 Body floating(const Vec3& at, bspf::CollisionMethod method) {
   Body body = walker(at, method);
   body.settings.gravity = 0;
@@ -435,13 +435,14 @@ Body floating(const Vec3& at, bspf::CollisionMethod method) {
   return body;
 }
 
-// A big triangle through `apex` with unit normal `normal`, wound to face it.
-void appendPlane(bspc::Mesh& mesh, const Eigen::Vector3d& apex, const Eigen::Vector3d& normal) {
+// A triangle 12 m in radius around `centre`, with unit normal `normal` (by
+// its winding): a wall much larger than the body.
+void appendPlane(bspc::Mesh& mesh, const Eigen::Vector3d& centre, const Eigen::Vector3d& normal) {
   const Eigen::Vector3d u = normal.unitOrthogonal(), v = normal.cross(u);
   const auto base = static_cast<std::uint32_t>(mesh.vertices.size());
   for (int k = 0; k < 3; ++k) {
     const double angle = 2 * std::numbers::pi * k / 3;
-    mesh.vertices.push_back(apex + 12 * (std::cos(angle) * u + std::sin(angle) * v));
+    mesh.vertices.push_back(centre + 12 * (std::cos(angle) * u + std::sin(angle) * v));
   }
   mesh.triangles.push_back({base, base + 1, base + 2});
 }
