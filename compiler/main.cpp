@@ -4,10 +4,9 @@
 #include <bspc/compile.h>
 #include <bspc/info.h>
 #include <bspc/write.h>
-
-#include <CLI/CLI.hpp>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <iostream>
 #include <map>
 
@@ -63,11 +62,13 @@ int main(int argc, char** argv) {
   app.add_option("--query-reach", settings.tree.queryReach,
                  "Typical query size, metres: a split must pay for itself at this size")
       ->capture_default_str();
-  app.add_option("--candidates", settings.tree.candidates, "Split planes tried: axis, triangle, both")
+  app.add_option("--candidates", settings.tree.candidates,
+                 "Split planes tried: axis, triangle, both")
       ->transform(CLI::CheckedTransformer(
-          std::map<std::string, bspc::SplitCandidates>{{"axis", bspc::SplitCandidates::Axis},
-                                                        {"triangle", bspc::SplitCandidates::Triangle},
-                                                        {"both", bspc::SplitCandidates::Both}},
+          std::map<std::string, bspc::SplitCandidates>{
+              {"axis", bspc::SplitCandidates::Axis},
+              {"triangle", bspc::SplitCandidates::Triangle},
+              {"both", bspc::SplitCandidates::Both}},
           CLI::ignore_case))
       ->capture_default_str();
   app.add_option("--axis-candidates", settings.tree.axisCandidatesPerAxis,
@@ -91,6 +92,14 @@ int main(int argc, char** argv) {
     std::cerr << "bspc: error: need an input mesh and -o OUTPUT.bspf (see bspc --help)\n";
     return 2;
   }
+  // An option out of range is a usage error (exit status 2), like one CLI11
+  // refuses; compileFile checks the settings again, for library callers.
+  try {
+    bspc::validate(settings);
+  } catch (const bspc::CompileError& e) {
+    std::cerr << "bspc: error: " << e.what() << " (see bspc --help)\n";
+    return 2;
+  }
   if (!quiet && ::isatty(STDERR_FILENO))
     settings.progress = [](std::string_view line) {
       std::cerr << "\r\033[K" << line << std::flush;
@@ -101,8 +110,8 @@ int main(int argc, char** argv) {
     if (settings.progress) std::cerr << "\r\033[K";
     if (!statsJson.empty()) {
       const std::string json = bspc::toJson(report) + "\n";
-      bspc::writeFileAtomically(
-          statsJson, {reinterpret_cast<const std::uint8_t*>(json.data()), json.size()});
+      bspc::writeFileAtomically(statsJson,
+                                {reinterpret_cast<const std::uint8_t*>(json.data()), json.size()});
     }
     if (!quiet)
       std::cout << "bspc: wrote " << output << ": " << report.triangles << " triangles, "

@@ -62,6 +62,8 @@ struct Expected {
   std::vector<std::string> mentions;
   /// The reason: the line must contain at least one of these (any case).
   std::vector<std::string> reasons;
+  /// The exit status: 1 for a failed compile, 2 for bad options (README).
+  int status = 1;
 };
 
 // A clean failure: non-zero exit, exactly one line on stderr with the file
@@ -70,7 +72,7 @@ void requireCleanFailure(const bspf::test::CommandResult& r, const fs::path& out
                          const Expected& expected) {
   INFO("stderr: [" << r.err << "]");
   INFO("stdout: [" << r.out << "]");
-  CHECK(r.status != 0);
+  CHECK(r.status == expected.status);
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   CHECK(!r.err.empty());
   if (!r.err.empty()) CHECK(r.err.back() == '\n');
@@ -240,18 +242,18 @@ TEST_CASE("bspc fails cleanly on bad options", "[compiler][bad-input]") {
     Expected expected;
   };
   const std::vector<Case> cases{
-      {"--max-depth 0", {{}, {"max depth", "max-depth"}}},
-      {"--max-depth 65", {{}, {"max depth", "max-depth"}}},
-      {"--scale -1", {{}, {"scale"}}},
-      {"--scale=-1", {{}, {"scale"}}},
-      {"--scale 0", {{}, {"scale"}}},
-      {"--scale nan", {{}, {"scale"}}},
-      {"--up w", {{}, {"up"}}},
-      {"--max-leaf-triangles 0", {{}, {"leaf"}}},
-      {"--weld -0.5", {{}, {"weld"}}},
-      {"--candidates sideways", {{}, {"candidates"}}},
-      {"--max-depth many", {{}, {"max-depth", "max depth"}}},
-      {"--no-such-option", {{}, {"no-such-option"}}},
+      {"--max-depth 0", {{}, {"max depth", "max-depth"}, 2}},
+      {"--max-depth 65", {{}, {"max depth", "max-depth"}, 2}},
+      {"--scale -1", {{}, {"scale"}, 2}},
+      {"--scale=-1", {{}, {"scale"}, 2}},
+      {"--scale 0", {{}, {"scale"}, 2}},
+      {"--scale nan", {{}, {"scale"}, 2}},
+      {"--up w", {{}, {"up"}, 2}},
+      {"--max-leaf-triangles 0", {{}, {"leaf"}, 2}},
+      {"--weld -0.5", {{}, {"weld"}, 2}},
+      {"--candidates sideways", {{}, {"candidates"}, 2}},
+      {"--max-depth many", {{}, {"max-depth", "max depth"}, 2}},
+      {"--no-such-option", {{}, {"no-such-option"}, 2}},
   };
   for (const Case& c : cases) {
     DYNAMIC_SECTION(c.options) {
@@ -265,12 +267,12 @@ TEST_CASE("bspc without an input or output fails with one line", "[compiler][bad
   writeText(dir / "tri.obj", kTriangleObj);
   SECTION("no output") {
     const auto r = runBspc(quoted(dir / "tri.obj"));
-    CHECK(r.status != 0);
+    CHECK(r.status == 2);  // a usage error
     CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   }
   SECTION("nothing at all") {
     const auto r = runBspc("");
-    CHECK(r.status != 0);
+    CHECK(r.status == 2);  // a usage error
     CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   }
   CHECK(temporaryFiles(dir).empty());
@@ -283,7 +285,7 @@ TEST_CASE("bspc --info fails cleanly on a file that is not a blob", "[compiler][
     INFO(name);
     const auto r = runBspc("--info " + quoted(dir / name));
     INFO("stderr: [" << r.err << "]");
-    CHECK(r.status != 0);
+    CHECK(r.status == 1);
     CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
     CHECK_THAT(r.err, Catch::Contains(name));
   }

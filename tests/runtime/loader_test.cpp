@@ -787,6 +787,19 @@ TEST_CASE("Thousands of random multi-bit corruptions load or are refused, never 
 // ---------------------------------------------------------------------------
 // Semantic checks: blobs that FlatBuffers verifies but that break a rule.
 
+namespace {
+
+// `planes` with its face normal replaced (distance, edges and caps kept).
+schema::TrianglePlanes withFaceNormal(const schema::TrianglePlanes& planes,
+                                      const schema::Vec3& normal) {
+  return schema::TrianglePlanes(
+      schema::Plane(normal, planes.face().distance()),
+      flatbuffers::span<const schema::Plane, 3>(planes.edges()->data(), 3),
+      flatbuffers::span<const schema::Plane, 3>(planes.caps()->data(), 3));
+}
+
+}  // namespace
+
 TEST_CASE("Semantic violations are Malformed with a message saying what is wrong",
           "[runtime][loader]") {
   struct Case {
@@ -803,6 +816,22 @@ TEST_CASE("Semantic violations are Malformed with a message saying what is wrong
          c.triangles[5] = schema::Triangle(0, std::uint32_t(c.vertices.size()), 1);
        },
        "triangle 5 has a vertex index out of range"},
+      {"triangle first vertex index out of range",
+       [](Content& c) {
+         c.triangles[3] = schema::Triangle(std::uint32_t(c.vertices.size()), 0, 1);
+       },
+       "triangle 3 has a vertex index out of range"},
+      {"triangle third vertex index out of range",
+       [](Content& c) {
+         c.triangles[7] = schema::Triangle(0, 1, std::uint32_t(c.vertices.size()) + 10);
+       },
+       "triangle 7 has a vertex index out of range"},
+      {"a face normal 0.2% too long",
+       [](Content& c) { c.planes[2] = withFaceNormal(c.planes[2], schema::Vec3(0, 1.002f, 0)); },
+       "face plane of triangle 2 has a normal not of unit length"},
+      {"a face normal 0.2% too short",
+       [](Content& c) { c.planes[2] = withFaceNormal(c.planes[2], schema::Vec3(0.998f, 0, 0)); },
+       "face plane of triangle 2 has a normal not of unit length"},
       {"node 0's child points to node 0",
        [](Content& c) {
          REQUIRE(c.root == 0);
@@ -864,13 +893,7 @@ TEST_CASE("Semantic violations are Malformed with a message saying what is wrong
        },
        "vertex 0 is not finite"},
       {"a non-unit face normal",
-       [](Content& c) {
-         const schema::TrianglePlanes& p = c.planes[2];
-         const schema::Plane face(schema::Vec3(0, 2, 0), p.face().distance());
-         c.planes[2] = schema::TrianglePlanes(
-             face, flatbuffers::span<const schema::Plane, 3>(p.edges()->data(), 3),
-             flatbuffers::span<const schema::Plane, 3>(p.caps()->data(), 3));
-       },
+       [](Content& c) { c.planes[2] = withFaceNormal(c.planes[2], schema::Vec3(0, 2, 0)); },
        "face plane of triangle 2 has a normal not of unit length"},
       {"a non-unit edge normal",
        [](Content& c) {
@@ -966,6 +989,19 @@ TEST_CASE("Semantic violations are Malformed with a message saying what is wrong
     CHECK_FALSE(r);
     CHECK_THAT(r.message, Contains("<memory>"));
     CHECK_THAT(r.message, Contains(test.expected));
+  }
+}
+
+TEST_CASE("A normal within the loader's tolerance (squared length 1 +- 1e-3) loads",
+          "[runtime][loader]") {
+  // Lengths 1 + 4e-4 and 1 - 4e-4: squared, about 1 +- 8e-4, inside the
+  // tolerance; rounding in a compiler must not get a blob refused.
+  for (const float length : {1.0004f, 0.9996f}) {
+    INFO("length " << length);
+    const OpenResult r = loadModified(
+        [&](Content& c) { c.planes[2] = withFaceNormal(c.planes[2], schema::Vec3(0, 0, length)); });
+    INFO(r.message);
+    CHECK(r.status == LoadStatus::Ok);
   }
 }
 

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
+#include <thread>
 #include <vector>
 
 #include "support/test_support.h"
@@ -411,4 +412,388 @@ TEST_CASE("the same inputs give the same trajectory, and a step leaves the world
     REQUIRE((first[i].array() == second[i].array()).all());
   REQUIRE(std::equal(before.begin(), before.end(),
                      reinterpret_cast<const std::uint8_t*>(level.world.bytes().data())));
+}
+
+namespace {
+
+// A room corner: walls whose faces are the planes x = 5 and z = 5, appended
+// in the order given (so the first one's triangles have the lower indices).
+bspc::Mesh corner(bool xWallFirst) {
+  bspc::Mesh mesh = floorSlab();
+  const bspc::Mesh xWall = bspf::test::boxMesh({5, 0, -20}, {6, 4, 6});
+  const bspc::Mesh zWall = bspf::test::boxMesh({-20, 0, 5}, {6, 4, 6});
+  bspf::test::append(mesh, xWallFirst ? xWall : zWall);
+  bspf::test::append(mesh, xWallFirst ? zWall : xWall);
+  return mesh;
+}
+
+// A body without gravity, floating where it is put, free to move fast.
+Body floating(const Vec3& at, bspf::CollisionMethod method) {
+  Body body = walker(at, method);
+  body.settings.gravity = 0;
+  body.settings.maxHorizontalSpeed = 100;
+  return body;
+}
+
+// A triangle 12 m in radius around `centre`, with unit normal `normal` (by
+// its winding): a wall much larger than the body.
+void appendPlane(bspc::Mesh& mesh, const Eigen::Vector3d& centre, const Eigen::Vector3d& normal) {
+  const Eigen::Vector3d u = normal.unitOrthogonal(), v = normal.cross(u);
+  const auto base = static_cast<std::uint32_t>(mesh.vertices.size());
+  for (int k = 0; k < 3; ++k) {
+    const double angle = 2 * std::numbers::pi * k / 3;
+    mesh.vertices.push_back(centre + 12 * (std::cos(angle) * u + std::sin(angle) * v));
+  }
+  mesh.triangles.push_back({base, base + 1, base + 2});
+}
+
+// The centre of an ellipsoid resting against every plane (unit normal n_i
+// through the origin) at once: n_i . c = effectiveRadius(n_i) + skin.
+Vec3 restingCentre(const std::vector<Eigen::Vector3d>& normals, bspf::EllipsoidRadii radii,
+                   float skin) {
+  Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < normals.size(); ++i) {
+    m.row(int(i)) = normals[i].transpose();
+    rhs(int(i)) = bspf::effectiveRadius(Vec3(normals[i].cast<float>()), radii) + skin;
+  }
+  if (normals.size() == 2) m.row(2) = Eigen::Vector3d::UnitY().transpose();  // stay at y = 0
+  return m.colPivHouseholderQr().solve(rhs).cast<float>();
+}
+
+}  // namespace
+
+TEST_CASE("a move still blocked after exactly maxIterations slides is refused",
+          "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  // Diagonally into a corner: one slide per wall, so one slide is too few
+  // and two are enough.
+  const Level level(corner(true));
+  bspf::StepScratch scratch;
+  const Vec3 start(4, 2, 4);
+  const Vec3 velocity(60, 0, 60);  // 1 m a frame along each axis
+  for (const int slides : {1, 2}) {
+    INFO("maxIterations " << slides);
+    Body body = floating(start, method);
+    body.settings.maxIterations = slides;
+    body.velocity = velocity;
+    bspf::StepReport report;
+    bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch, &report);
+    REQUIRE(report.iterations == slides);
+    REQUIRE(report.refused == (slides == 1));
+    if (slides == 2) {
+      // Slid into the corner, against both walls.
+      REQUIRE(body.position.x() == Approx(5 - 0.45f).margin(2e-3));
+      REQUIRE(body.position.z() == Approx(5 - 0.45f).margin(2e-3));
+    } else if (method == bspf::CollisionMethod::Planes) {
+      // Refused: the body stays at its start.
+      REQUIRE((body.position.array() == start.array()).all());
+    } else {
+      // Refused: the body stops at its last contact, touching a wall, clear of both.
+      REQUIRE(std::max(body.position.x(), body.position.z()) == Approx(5 - 0.45f).margin(2e-3));
+      REQUIRE(body.position.x() <= 5 - 0.45f + 1e-4f);
+      REQUIRE(body.position.z() <= 5 - 0.45f + 1e-4f);
+      REQUIRE((body.position - start).norm() > 0.5f);
+    }
+  }
+}
+
+TEST_CASE(
+    "a body starting inside a wall's offset surface is pushed out to it, and the report "
+    "gives the wall's outward normal",
+    "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  bspc::Mesh mesh = floorSlab();
+  bspf::test::append(mesh, bspf::test::boxMesh({5, 0, -10}, {5.5, 4, 10}));
+  const Level level(mesh);
+  bspf::StepScratch scratch;
+  for (const float inside : {0.001f, 0.05f, 0.2f, 0.4f}) {
+    INFO("started " << inside << " m within the offset surface");
+    // Moving along the wall, not into it.
+    Body body = floating({5 - 0.45f + inside, 2, 0}, method);
+    body.velocity = Vec3(0, 0, 3);
+    bspf::StepReport report;
+    bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch, &report);
+    REQUIRE_FALSE(report.refused);
+    // Out, and clear of the wall by part of the skin at least (the exact
+    // sweep keeps it in sphere units: less than the skin along a short radius).
+    REQUIRE(body.position.x() <= 5 - 0.45f - 0.4f * body.settings.skin);
+    REQUIRE(body.position.x() >= 5 - 0.45f - 3e-3f);
+    REQUIRE(report.contactCount >= 1);
+    const Vec3 normal = report.contactNormals[0];
+    REQUIRE(normal.norm() == Approx(1).margin(1e-5));
+    REQUIRE(normal.x() == Approx(-1).margin(1e-4));
+  }
+}
+
+TEST_CASE(
+    "a step-up never lifts a body more than maxStepHeight, even under a low ceiling or "
+    "onto a walkable slope above the step",
+    "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  const float stepHeight = 0.35f;
+  SECTION("a 0.3 m step under a ceiling 0.15 m above the head: lifts 0.15 at most, stays") {
+    bspc::Mesh mesh = floorSlab();
+    bspf::test::append(mesh, bspf::test::boxMesh({0, 0, -2}, {4, 0.3, 2}));
+    bspf::test::append(mesh, bspf::test::boxMesh({-4, 1.85, -2}, {4, 2.5, 2}));
+    const Level level(mesh);
+    bspf::StepScratch scratch;
+    Body body = walker({-1, 0.851f, 0}, method);
+    body.settings.maxStepHeight = stepHeight;
+    run(level.world, body, Vec3::Zero(), 10, scratch);
+    REQUIRE(body.grounded);
+    float highest = body.position.y();
+    for (int f = 0; f < 120; ++f) {
+      bspf::stepBody(level.world, body, Vec3(60, 0, 0), kDt, scratch);
+      highest = std::max(highest, body.position.y());
+    }
+    // Never through the ceiling, never onto the step (a rounded body may
+    // lean on the step's edge, a little above the floor).
+    REQUIRE(highest <= 1.85f - 0.85f);
+    REQUIRE(body.position.x() < 0);
+    REQUIRE(body.position.y() < 0.3f + 0.85f);
+  }
+  SECTION("a 0.3 m step topped by a 44 degree ramp: no frame rises more than the step height") {
+    bspc::Mesh mesh = floorSlab();
+    bspf::test::append(mesh, bspf::test::boxMesh({0, 0, -2}, {4, 0.3, 2}));
+    // A ramp rising along +x from the step's edge.
+    bspc::Mesh ramp = bspf::test::boxMesh({0, -1, -2}, {6, 0, 2});
+    const Eigen::Matrix3d tilt =
+        Eigen::AngleAxisd(44 * std::numbers::pi / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    for (Eigen::Vector3d& v : ramp.vertices) v = tilt * v + Eigen::Vector3d(0, 0.3, 0);
+    bspf::test::append(mesh, ramp);
+    const Level level(mesh);
+    bspf::StepScratch scratch;
+    Body body = walker({-1, 0.851f, 0}, method);
+    body.settings.maxStepHeight = stepHeight;
+    body.settings.maxHorizontalSpeed = 30;  // half a metre a frame
+    run(level.world, body, Vec3::Zero(), 10, scratch);
+    REQUIRE(body.grounded);
+    // Walking up the ramp at 30 m/s rises more than that a frame; a frame
+    // that starts on the floor, at the step, is a step-up.
+    int stepFrames = 0;
+    for (int f = 0; f < 30; ++f) {
+      const float before = body.position.y();
+      bspf::stepBody(level.world, body, Vec3(3000, 0, 0), kDt, scratch);
+      INFO("frame " << f << " at " << body.position.transpose());
+      if (before > 0.85f + 0.01f) continue;
+      ++stepFrames;
+      REQUIRE(body.position.y() - before <= stepHeight + body.settings.skin);
+    }
+    REQUIRE(stepFrames > 0);
+  }
+}
+
+TEST_CASE(
+    "a body pushed into a sharp V-shaped crease or a pyramid's tip reaches the point touching "
+    "every wall, never refused",
+    "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  // Walls meeting at the origin, the body pushed along +x into where they
+  // meet. Their normals are more than 90 degrees apart, so moving the body
+  // out of one wall moves it into the others: a sharp wedge, and a pyramid's
+  // tip seen from inside (none of its walls walkable).
+  const double b = std::sqrt(1 - 0.4 * 0.4);
+  auto pyramidWall = [&](double degrees) {
+    const double angle = degrees * std::numbers::pi / 180;
+    return Eigen::Vector3d(-0.4, b * std::cos(angle), b * std::sin(angle));
+  };
+  for (const bool pyramid : {false, true}) {
+    const std::vector<Eigen::Vector3d> normals =
+        pyramid ? std::vector{pyramidWall(60), pyramidWall(180), pyramidWall(300)}
+                : std::vector{Eigen::Vector3d(-0.6, 0, 0.8), Eigen::Vector3d(-0.6, 0, -0.8)};
+    INFO((pyramid ? "corner of three" : "V crease"));
+    bspc::Mesh mesh;
+    for (const Eigen::Vector3d& n : normals) appendPlane(mesh, Eigen::Vector3d::Zero(), n);
+    const Level level(mesh);
+    bspf::StepScratch scratch;
+    Body body = floating({-4, pyramid ? 0.2f : 0.0f, 0.3f}, method);
+    const Vec3 goal = restingCentre(normals, body.radii, body.settings.skin);
+    bspf::StepReport report;
+    for (int f = 0; f < 120; ++f) {
+      const Vec3 towards = (goal - body.position) * 600;
+      bspf::stepBody(level.world, body, Vec3(towards.x(), 0, towards.z()), kDt, scratch, &report);
+      if (pyramid) body.velocity.y() = (goal.y() - body.position.y()) * 30;
+      INFO("frame " << f << " at " << body.position.transpose());
+      REQUIRE_FALSE(report.refused);
+    }
+    INFO("goal " << goal.transpose() << ", at " << body.position.transpose());
+    REQUIRE((body.position - goal).norm() < 3e-3f);
+  }
+}
+
+TEST_CASE(
+    "of two blocking walls the planes method slides first against the one faced more "
+    "directly, and in a tie against the lower-numbered triangle",
+    "[runtime][movement]") {
+  bspf::StepScratch scratch;
+  for (const bool xWallFirst : {true, false}) {
+    INFO((xWallFirst ? "x wall first" : "z wall first"));
+    const Level level(corner(xWallFirst));
+    struct Case {
+      Vec3 velocity;
+      Vec3 firstNormal;
+    };
+    const Vec3 xWall(-1, 0, 0), zWall(0, 0, -1);
+    for (const Case& c : {Case{{90, 0, 60}, xWall}, Case{{60, 0, 90}, zWall},
+                          Case{{60, 0, 60}, xWallFirst ? xWall : zWall}}) {
+      INFO("velocity " << c.velocity.transpose());
+      Body body = floating({4, 2, 4}, bspf::CollisionMethod::Planes);
+      body.velocity = c.velocity;
+      bspf::StepReport report;
+      bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch, &report);
+      REQUIRE(report.contactCount == 2);
+      REQUIRE((report.contactNormals[0] - c.firstNormal).norm() < 1e-6f);
+    }
+  }
+}
+
+TEST_CASE(
+    "the planes method's grown triangle is cut at a sharp corner by the cap plane, "
+    "the body's horizontal radius beyond the corner",
+    "[runtime][movement]") {
+  // One floor triangle with a 11 degree corner at the origin pointing -x:
+  // the edge planes alone, grown by the radius, would reach about 4.6 m
+  // beyond the corner; the corner's cap plane stops them at x = -radius.
+  bspc::Mesh mesh;
+  mesh.vertices = {{0, 0, 0}, {10, 0, 1}, {10, 0, -1}};
+  mesh.triangles = {{0, 1, 2}};
+  const Level level(mesh);
+  bspf::StepScratch scratch;
+  for (const float beyond : {-0.01f, 0.01f, 0.3f}) {
+    INFO("centre " << beyond << " m beyond the cap plane's offset");
+    Body body = floating({-0.45f - beyond, 0.9f, 0}, bspf::CollisionMethod::Planes);
+    body.velocity = Vec3(0, -6, 0);  // 0.1 m this frame, through the offset plane at 0.85
+    bspf::StepReport report;
+    bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch, &report);
+    if (beyond < 0) {
+      REQUIRE(report.iterations == 1);
+      REQUIRE(body.position.y() == Approx(0.851f).margin(1e-4));
+    } else {
+      REQUIRE(report.iterations == 0);
+      REQUIRE(body.position.y() == Approx(0.8f).margin(1e-4));
+    }
+  }
+  SECTION("the exact sweep lets a body beyond the corner's reach fall past it") {
+    for (const float beyond : {0.01f, 0.3f}) {
+      INFO("centre " << beyond << " m beyond the corner's reach");
+      Body body = floating({-0.45f - beyond, 0.9f, 0}, bspf::CollisionMethod::ExactSweep);
+      body.velocity = Vec3(0, -60, 0);  // 1 m this frame, down past the corner
+      bspf::StepReport report;
+      bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch, &report);
+      REQUIRE(report.iterations == 0);
+      REQUIRE(body.position.y() == Approx(-0.1f).margin(1e-4));
+    }
+  }
+}
+
+TEST_CASE(
+    "an airborne body slows horizontally by airFriction * dt a frame, never reversing, and "
+    "input never pushes it past the speed cap",
+    "[runtime][movement]") {
+  const Level level(floorSlab());
+  bspf::StepScratch scratch;
+  Body body = floating({0, 10, 0}, bspf::CollisionMethod::Planes);
+  body.settings.airFriction = 3;
+  body.velocity = Vec3(3, 0, -4);  // 5 m/s
+  const Vec3 direction = body.velocity.normalized();
+  for (int f = 1; f <= 120; ++f) {
+    bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch);
+    const float expected = std::max(0.0f, 5.0f - 3.0f * kDt * float(f));
+    REQUIRE(body.velocity.norm() == Approx(expected).margin(1e-4));
+    REQUIRE(body.velocity.dot(direction) >= 0);
+  }
+  REQUIRE(body.velocity.norm() == 0);
+  body.settings.maxHorizontalSpeed = 6;
+  for (int f = 0; f < 30; ++f) {
+    bspf::stepBody(level.world, body, Vec3(0, 0, 1000), kDt, scratch);
+    REQUIRE(Eigen::Vector2f(body.velocity.x(), body.velocity.z()).norm() <= 6 + 1e-4f);
+  }
+  REQUIRE(body.velocity.z() == Approx(6).margin(1e-4));
+}
+
+TEST_CASE(
+    "a small and a big body overlapping across grid cells are each pushed half the overlap "
+    "apart, horizontally, and lose their closing speed",
+    "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  const Level level(floorSlab());
+  bspf::StepScratch scratch;
+  // The grid's cells are as wide as the widest body (4 m): these centres are
+  // 2.15 m apart, in neighbouring cells, overlapping by 0.35 m.
+  Body big = floating({1.9f, 3, 0}, method);
+  big.radii = {2.0f, 2.0f};
+  Body small = floating({4.05f, 3, 0}, method);
+  small.radii = {0.5f, 0.5f};
+  small.velocity = Vec3(-0.6f, 0, 0);  // closing, 1 cm this frame
+  std::vector<Body> bodies{big, small};
+  const std::vector<Vec3> forces(2, Vec3::Zero());
+  std::vector<bspf::StepReport> reports(2);
+  bspf::stepBodies(level.world, bodies, forces, kDt, scratch, reports);
+  const float overlap = 2.5f - (2.15f - 0.01f);
+  const float half = 0.5f * overlap + 0.5f * big.settings.skin;
+  REQUIRE(bodies[0].position.x() == Approx(1.9f - half).margin(1e-4));
+  REQUIRE(bodies[1].position.x() == Approx(4.05f - 0.01f + half).margin(1e-4));
+  for (int i = 0; i < 2; ++i) {
+    REQUIRE(reports[i].bodyContacts == 1);
+    REQUIRE(bodies[i].position.y() == 3);
+    REQUIRE(bodies[i].position.z() == 0);
+  }
+  REQUIRE(bodies[1].velocity.x() == Approx(0).margin(1e-6));
+
+  SECTION("centres at different heights: still pushed horizontally") {
+    std::vector<Body> tilted{big, small};
+    tilted[1].position.y() = 3.6f;
+    tilted[1].velocity.setZero();
+    bspf::stepBodies(level.world, tilted, forces, kDt, scratch, reports);
+    REQUIRE(tilted[0].position.x() < 1.9f);
+    REQUIRE(tilted[1].position.x() > 4.05f);
+    REQUIRE(tilted[0].position.y() == 3);
+    REQUIRE(tilted[1].position.y() == 3.6f);
+  }
+}
+
+TEST_CASE(
+    "threads stepping separate bodies on one shared World, each with its own scratch, get "
+    "the sequential results",
+    "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  bspc::Mesh mesh = floorWithWall();
+  bspf::test::append(mesh, slope(25));
+  const Level level(mesh);
+  constexpr int kThreads = 4, kPerThread = 6, kFrames = 120;
+  auto makeGroup = [&](int group) {
+    std::vector<Body> bodies;
+    for (int i = 0; i < kPerThread; ++i)
+      bodies.push_back(
+          walker({-4.0f + 1.1f * i, 1.0f + 0.2f * group, -6.0f + 3.0f * group}, method));
+    return bodies;
+  };
+  auto simulate = [&](std::vector<Body>& bodies, int group) {
+    bspf::StepScratch scratch;
+    std::vector<Vec3> forces;
+    for (int i = 0; i < kPerThread; ++i)
+      forces.emplace_back(std::cos(float(i + group)) * 60, 0, std::sin(float(i + group)) * 60);
+    for (int f = 0; f < kFrames; ++f) bspf::stepBodies(level.world, bodies, forces, kDt, scratch);
+  };
+  std::vector<std::vector<Body>> sequential, threaded;
+  for (int g = 0; g < kThreads; ++g) {
+    sequential.push_back(makeGroup(g));
+    threaded.push_back(makeGroup(g));
+    simulate(sequential.back(), g);
+  }
+  std::vector<std::thread> threads;
+  for (int g = 0; g < kThreads; ++g) threads.emplace_back([&, g] { simulate(threaded[g], g); });
+  for (std::thread& t : threads) t.join();
+  for (int g = 0; g < kThreads; ++g)
+    for (int i = 0; i < kPerThread; ++i) {
+      REQUIRE((threaded[g][i].position.array() == sequential[g][i].position.array()).all());
+      REQUIRE((threaded[g][i].velocity.array() == sequential[g][i].velocity.array()).all());
+    }
 }

@@ -166,3 +166,46 @@ TEST_CASE("the swept-leaf query lists leaves in the order the path passes them",
   }
   REQUIRE(checked > 100);  // most walks cross several cells
 }
+
+TEST_CASE(
+    "the swept-leaf query lists the far side of a split plane that the volume comes within "
+    "kSweepMarginMetres of, and not beyond",
+    "[runtime][query]") {
+  // The root's split plane of a two-box level; every leaf behind it.
+  bspc::Mesh mesh = bspf::test::boxMesh({-3, 0, -1}, {-1, 1, 1});
+  bspf::test::append(mesh, bspf::test::boxMesh({1, 0, -1}, {3, 1, 1}));
+  const bspf::test::AlignedBytes bytes(bspf::test::compile(mesh));
+  const bspf::World world = *bspf::viewWorld(bytes.span()).world;
+  REQUIRE(world.root() >= 0);
+  const bspf::schema::Node& root = world.nodes()[world.root()];
+  std::vector<std::uint32_t> behind;
+  std::vector<std::int32_t> stack{root.back()};
+  while (!stack.empty()) {
+    const std::int32_t ref = stack.back();
+    stack.pop_back();
+    if (ref < 0) {
+      behind.push_back(static_cast<std::uint32_t>(-(ref + 1)));
+    } else {
+      stack.push_back(world.nodes()[ref].front());
+      stack.push_back(world.nodes()[ref].back());
+    }
+  }
+  const Vec3 normal = bspf::toVec3(root.split().normal());
+  const Vec3 onPlane = normal * root.split().distance();
+  const EllipsoidRadii radii{0.45f, 0.85f};
+  const float reach = bspf::effectiveRadius(normal, radii);
+  // The margin grows with the plane's offset (float rounding), a little.
+  const float slack = 4e-7f * std::abs(root.split().distance()) + 1e-6f;
+  auto listsALeafBehind = [&](float gap) {
+    const Vec3 centre = onPlane + normal * (reach + gap);
+    std::vector<std::uint32_t> leaves;
+    bspf::collectSweptLeaves(world, centre, centre, radii, leaves);
+    return std::any_of(leaves.begin(), leaves.end(), [&](std::uint32_t leaf) {
+      return std::find(behind.begin(), behind.end(), leaf) != behind.end();
+    });
+  };
+  REQUIRE(listsALeafBehind(0.5f * bspf::kSweepMarginMetres));
+  REQUIRE(listsALeafBehind(bspf::kSweepMarginMetres - slack));
+  REQUIRE_FALSE(listsALeafBehind(bspf::kSweepMarginMetres + 2 * slack + 1e-5f));
+  REQUIRE_FALSE(listsALeafBehind(0.01f));
+}

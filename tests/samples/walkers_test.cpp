@@ -425,7 +425,7 @@ TEST_CASE("walkers --brushes counts the agent-frames inside a solid", "[samples]
           std::pair{dir / "absent.brushes.txt", std::string("cannot open")}}) {
       const auto r = runWalkers(common + " --brushes " + quoted(file));
       INFO(r.err << r.out);
-      REQUIRE(r.status != 0);
+      REQUIRE(r.status == 1);
       REQUIRE(r.out.empty());
       REQUIRE_THAT(r.err, Catch::StartsWith("walkers: error: " + file.string() + ": ") &&
                               Catch::Contains(reason) && Catch::EndsWith("\n"));
@@ -463,4 +463,74 @@ TEST_CASE("walkers --accuracy reports penetration and the deviation between narr
   REQUIRE(p50 < 0.01);
   REQUIRE(max > p50);
   REQUIRE(max <= 40.0 / 60.0 + 0.05);  // never more than one frame's travel
+}
+
+TEST_CASE(
+    "walkers takes every documented option and reports every documented JSON key with the "
+    "inputs it was given",
+    "[samples][walkers]") {
+  const std::filesystem::path dir = bspf::test::freshTempDir("walkers-keys");
+  const std::filesystem::path samples = bspf::test::samplesDir();
+  bspc::compileFile(samples / "box_room.obj", dir / "box_room.bspf", {});
+  const auto r = runWalkers(quoted(dir / "box_room.bspf") + " --spawns " +
+                            quoted(samples / "box_room.spawns.txt") +
+                            " --agents 5 --frames 7 --speed 3.5 --seed 9 --dt 0.025"
+                            " --radius-xz 0.3 --radius-y 0.6 --method exact --step-height 0.2"
+                            " --trace " +
+                            quoted(dir / "trace.csv") + " --json");
+  INFO(r.err << r.out);
+  REQUIRE(r.status == 0);
+  REQUIRE(jsonValue(r.out, "agents") == "5");
+  REQUIRE(jsonValue(r.out, "frames") == "7");
+  REQUIRE(jsonValue(r.out, "steps") == "35");
+  REQUIRE(jsonValue(r.out, "seed") == "9");
+  REQUIRE(jsonValue(r.out, "placement") == "\"spawns\"");
+  REQUIRE(jsonValue(r.out, "method") == "\"exact\"");
+  REQUIRE_THAT(jsonValue(r.out, "level"), Catch::Contains("box_room.bspf"));
+  for (const auto& [key, value] :
+       {std::pair{"speed", 3.5}, std::pair{"dt", 0.025}, std::pair{"step_height", 0.2},
+        std::pair{"radius_xz", 0.3}, std::pair{"radius_y", 0.6}}) {
+    INFO(key);
+    REQUIRE(std::stod(jsonValue(r.out, key)) == Approx(value));
+  }
+  for (const char* key : {"ns_per_step", "refused_moves", "iterations_mean", "iterations_max",
+                          "grounded_fraction", "body_contacts_mean", "fell_out"}) {
+    INFO(key);
+    const std::string value = jsonValue(r.out, key);
+    REQUIRE(!value.empty());
+    REQUIRE(std::stod(value) >= 0);
+  }
+  REQUIRE(std::stod(jsonValue(r.out, "grounded_fraction")) <= 1);
+  for (const char* key : {"inside_solid", "penetration_p99", "penetration_max", "deviation_p50",
+                          "deviation_p99", "deviation_max"}) {
+    INFO(key);
+    REQUIRE(jsonValue(r.out, key) == "null");
+  }
+  // The trace: a header, then one row per agent per frame.
+  std::ifstream trace(dir / "trace.csv");
+  std::string line;
+  int rows = 0;
+  while (std::getline(trace, line)) rows += !line.empty();
+  REQUIRE(rows >= 35);
+  REQUIRE(rows <= 36);
+}
+
+TEST_CASE("walkers exits with status 2 for bad options and 1 for a level it cannot open",
+          "[samples][walkers]") {
+  const std::filesystem::path dir = bspf::test::freshTempDir("walkers-status");
+  bspc::compileFile(bspf::test::samplesDir() / "box_room.obj", dir / "box_room.bspf", {});
+  const std::string level = quoted(dir / "box_room.bspf");
+  for (const std::string options :
+       {"--agents 0", "--method sideways", "--dt -1", "--no-such-option", "--radius-xz 0"}) {
+    INFO(options);
+    const auto r = runWalkers(level + " " + options);
+    INFO(r.err);
+    REQUIRE(r.status == 2);
+    REQUIRE_THAT(r.err, Catch::StartsWith("walkers: error: ") && Catch::EndsWith("\n"));
+    REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  }
+  const auto missing = runWalkers(quoted(dir / "absent.bspf"));
+  INFO(missing.err);
+  REQUIRE(missing.status == 1);
+  REQUIRE_THAT(missing.err, Catch::Contains("absent.bspf"));
 }
