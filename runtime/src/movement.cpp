@@ -2,12 +2,12 @@
 // velocity, slide against the level, step-up, contact response); stepBodies
 // steps every body, then runs the body-against-body phase.
 #include <bspf/movement.h>
+#include <bspf/thread_pool.h>
 
 #include <algorithm>
 #include <cassert>
 #include <cmath>
 
-#include "body_phase.h"
 #include "slide.h"
 #include "velocity.h"
 
@@ -136,15 +136,44 @@ void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepS
   }
 }
 
-void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3> forces, float dt,
-                StepScratch& scratch, std::span<StepReport> reports) {
+void stepBodiesAgainstLevel(const World& world, std::span<Body> bodies,
+                            std::span<const Vec3> forces, float dt, StepScratch& scratch,
+                            std::span<StepReport> reports) {
   assert(forces.size() == bodies.size());
   assert(reports.empty() || reports.size() == bodies.size());
-  auto reportOf = [&](std::size_t i) { return reports.empty() ? nullptr : &reports[i]; };
   for (std::size_t i = 0; i < bodies.size(); ++i)
-    stepBody(world, bodies[i], forces[i], dt, scratch, reportOf(i));
+    stepBody(world, bodies[i], forces[i], dt, scratch, reports.empty() ? nullptr : &reports[i]);
+}
 
-  detail::pushBodiesApart(world, bodies, scratch, reports);
+void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3> forces, float dt,
+                StepScratch& scratch, std::span<StepReport> reports) {
+  stepBodiesAgainstLevel(world, bodies, forces, dt, scratch, reports);
+  scratch.bodyGrid.build(bodies);
+  pushBodiesApart(world, scratch.bodyGrid, bodies, 0, bodies.size(), scratch, reports);
+}
+
+void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3> forces, float dt,
+                ThreadPool& pool, std::span<StepScratch> scratches, std::span<StepReport> reports) {
+  assert(forces.size() == bodies.size());
+  assert(reports.empty() || reports.size() == bodies.size());
+  assert(scratches.size() >= std::size_t(pool.threadCount()));
+  // Small ranges balance the threads (a body against a wall costs several
+  // times one in the open); each range still holds enough work to hide the
+  // hand-out.
+  constexpr std::size_t kBodiesPerRange = 16;
+  pool.parallelFor(
+      bodies.size(), kBodiesPerRange, [&](int thread, std::size_t first, std::size_t last) {
+        const std::size_t count = last - first;
+        stepBodiesAgainstLevel(world, bodies.subspan(first, count), forces.subspan(first, count),
+                               dt, scratches[thread],
+                               reports.empty() ? reports : reports.subspan(first, count));
+      });
+  BodyGrid& grid = scratches[0].bodyGrid;
+  grid.build(bodies);
+  pool.parallelFor(bodies.size(), kBodiesPerRange,
+                   [&](int thread, std::size_t first, std::size_t last) {
+                     pushBodiesApart(world, grid, bodies, first, last, scratches[thread], reports);
+                   });
 }
 
 }  // namespace bspf
