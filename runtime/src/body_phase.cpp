@@ -16,37 +16,42 @@ namespace bspf {
 
 namespace {
 
-std::int32_t cellCoordinate(float v, float cell) {
-  const float c = std::floor(v / cell);
-  // Far beyond any level (or not a number): one shared cell, still correct
-  // (only slower) since every pair found is tested for overlap.
-  return c > -1e9f && c < 1e9f ? static_cast<std::int32_t>(c) : 0;
-}
-
-std::uint32_t bucketOf(const std::array<std::int32_t, 3>& cell, std::uint32_t mask) {
-  return (std::uint32_t(cell[0]) * 73856093u ^ std::uint32_t(cell[1]) * 19349663u ^
-          std::uint32_t(cell[2]) * 83492791u) &
-         mask;
+// One coordinate of a cell, 21 bits: 2 million cells along each axis, about
+// 1,900 km of 0.9 m cells. Beyond (or not a number), bodies share the edge
+// cells: still correct, as every pair found is tested for overlap, only
+// slower.
+std::uint64_t cellCoordinate(float v, float cell, int offset) {
+  constexpr float kHalfRange = float(1 << 20);
+  float c = std::floor(v / cell) + float(offset);
+  c = c > -kHalfRange ? (c < kHalfRange - 1 ? c : kHalfRange - 1) : -kHalfRange;
+  return std::uint64_t(std::int64_t(c) + (1 << 20));
 }
 
 // The horizontal direction along which bodies `self` and `other` part when
 // their centres give none (the same point, or one right above the other):
 // fixed by the pair, opposite for the two, and spread around the circle over
-// pairs so that a pile at one point spreads out in every direction.
+// pairs so that a pile at one point spreads out in every direction. One of
+// 256 directions, from a table: a pile's first frame needs millions.
 Vec3 tieBreakDirection(std::uint32_t self, std::uint32_t other) {
+  static const std::array<Vec3, 256> directions = [] {
+    std::array<Vec3, 256> table;
+    for (int k = 0; k < 256; ++k) {
+      const float angle = float(k) * 2 * std::numbers::pi_v<float> / 256;
+      table[k] = Vec3(std::cos(angle), 0, std::sin(angle));
+    }
+    return table;
+  }();
   const std::uint32_t low = std::min(self, other), high = std::max(self, other);
   std::uint64_t z = (std::uint64_t(low) << 32 | high) + 0x9e3779b97f4a7c15ull;
   z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
   z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  const float angle = float(z >> 40) * 0x1p-24f * 2 * std::numbers::pi_v<float>;
-  const float sign = self == low ? 1.0f : -1.0f;
-  return sign * Vec3(std::cos(angle), 0, std::sin(angle));
+  return (self == low ? 1.0f : -1.0f) * directions[(z ^ (z >> 31)) >> 56];
 }
 
 struct Pusher {
   float distance;
   std::uint32_t body;
-  Vec3 away;  ///< horizontal unit direction from the pusher to this body
+  Vec3 apart;  ///< from the pusher's centre to this body's
   float overlap;
 };
 
@@ -71,6 +76,19 @@ class NearestPushers {
 
 }  // namespace
 
+std::uint64_t BodyGrid::keyOf(const Vec3& p, int dx, int dy, int dz) const {
+  return cellCoordinate(p.x(), cellWidth_, dx) << 42 |
+         cellCoordinate(p.y(), cellHeight_, dy) << 21 | cellCoordinate(p.z(), cellWidth_, dz);
+}
+
+std::uint32_t BodyGrid::find(std::uint64_t key) const {
+  const std::uint32_t mask = std::uint32_t(cells_.size() - 1);
+  std::uint64_t h = key * 0x9e3779b97f4a7c15ull;
+  std::uint32_t slot = std::uint32_t(h >> 40) & mask;
+  while (cells_[slot].key != key && cells_[slot].key != kFree) slot = (slot + 1) & mask;
+  return slot;
+}
+
 void BodyGrid::build(std::span<const Body> bodies) {
   const std::size_t n = bodies.size();
   // Cells as wide as the widest body and as tall as the tallest: the centres
@@ -82,35 +100,34 @@ void BodyGrid::build(std::span<const Body> bodies) {
   }
   if (!(cellWidth_ > 0)) cellWidth_ = 1;
   if (!(cellHeight_ > 0)) cellHeight_ = 1;
-  std::uint32_t buckets = 16;
-  while (buckets < 2 * n) buckets *= 2;
-  bucketMask_ = buckets - 1;
+  // At most half full, so a look-up probes few slots.
+  std::size_t size = 16;
+  while (size < 2 * n) size *= 2;
+  cells_.assign(size, {kFree, 0, 0});
 
-  // A counting sort by bucket (stable: body index order within a bucket).
-  auto cellOf = [&](const Vec3& p) {
-    return std::array<std::int32_t, 3>{cellCoordinate(p.x(), cellWidth_),
-                                       cellCoordinate(p.y(), cellHeight_),
-                                       cellCoordinate(p.z(), cellWidth_)};
-  };
-  bucketStart_.assign(buckets + 1, 0);
-  bucketOf_.resize(n);
+  // A counting sort by cell: count, lay the cells out in table order, place
+  // each body in its cell's next place (stable: index order within a cell).
+  cellOf_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    bucketOf_[i] = bucketOf(cellOf(bodies[i].position), bucketMask_);
-    ++bucketStart_[bucketOf_[i] + 1];
+    const std::uint64_t key = keyOf(bodies[i].position);
+    const std::uint32_t slot = find(key);
+    cells_[slot].key = key;
+    ++cells_[slot].count;
+    cellOf_[i] = slot;
   }
-  for (std::uint32_t b = 0; b < buckets; ++b) bucketStart_[b + 1] += bucketStart_[b];
-  // Each body's slot is the next free one of its bucket; bucketStart_[b]
-  // serves as bucket b's cursor, then is restored from its neighbour.
+  std::uint32_t laid = 0;
+  for (Cell& c : cells_) {
+    c.first = laid;
+    laid += c.count;
+  }
   entries_.resize(n);
   slotOf_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t slot = bucketStart_[bucketOf_[i]]++;
-    slotOf_[i] = slot;
-    entries_[slot] = {bodies[i].position, bodies[i].radii, std::uint32_t(i),
-                      cellOf(bodies[i].position)};
+    Cell& c = cells_[cellOf_[i]];
+    slotOf_[i] = c.first++;
+    entries_[slotOf_[i]] = {bodies[i].position, bodies[i].radii, std::uint32_t(i)};
   }
-  for (std::uint32_t b = buckets; b > 0; --b) bucketStart_[b] = bucketStart_[b - 1];
-  bucketStart_[0] = 0;
+  for (Cell& c : cells_) c.first -= c.count;
 }
 
 void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> bodies,
@@ -124,52 +141,43 @@ void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> b
     int examined = 0;
     auto examine = [&](const BodyGrid::Entry& other) {
       ++examined;
-      Vec3 apart = self.position - other.position;  // from the other towards this body
-      float distance = apart.norm();
-      Vec3 away(apart.x(), 0, apart.z());
-      if (distance <= 1e-6f) {
-        distance = 0;
-        apart = away = tieBreakDirection(self.body, other.body);
-      } else {
-        apart /= distance;
-        away = away.squaredNorm() > 1e-12f ? Vec3(away.normalized())
-                                           : tieBreakDirection(self.body, other.body);
-      }
-      const float overlap =
-          effectiveRadius(apart, self.radii) + effectiveRadius(apart, other.radii) - distance;
-      if (overlap > 0) nearest.offer({distance, other.body, away, overlap});
+      const Vec3 apart = self.position - other.position;  // from the other towards this body
+      // Overlapping ellipsoids overlap in their bounding boxes too: most
+      // candidates of a walking crowd end here, before any square root.
+      const float reachXZ = self.radii.xz + other.radii.xz;
+      if (std::abs(apart.x()) >= reachXZ || std::abs(apart.z()) >= reachXZ ||
+          std::abs(apart.y()) >= self.radii.y + other.radii.y)
+        return;
+      const float distance = apart.norm();
+      // At one point they part horizontally (tieBreakDirection).
+      const float overlap = distance > 1e-6f
+                                ? effectiveRadius(apart / distance, self.radii) +
+                                      effectiveRadius(apart / distance, other.radii) - distance
+                                : reachXZ;
+      if (overlap > 0) nearest.offer({distance > 1e-6f ? distance : 0, other.body, apart, overlap});
     };
 
-    // Its own cell first, outwards from its own slot (bodies of the same
-    // bucket sit in index order): in a pile larger than the candidate cap,
-    // each body meets the bodies nearest it in index order, not all the same
-    // few.
-    const std::uint32_t bucket = bucketOf(self.cell, grid.bucketMask_);
-    const std::uint32_t begin = grid.bucketStart_[bucket], end = grid.bucketStart_[bucket + 1];
+    // Its own cell first, outwards from its own place (a cell's bodies sit
+    // in index order): in a pile larger than the candidate cap, each body
+    // meets the bodies nearest it in index order, not all the same few.
+    const BodyGrid::Cell& own = grid.cells_[grid.cellOf_[i]];
     const std::uint32_t slot = grid.slotOf_[i];
     for (std::uint32_t step = 1; examined < kMaxBodyCandidates; ++step) {
-      const bool below = slot >= begin + step, above = slot + step < end;
+      const bool below = slot >= own.first + step, above = slot + step < own.first + own.count;
       if (!below && !above) break;
-      if (below && examined < kMaxBodyCandidates) {
-        const BodyGrid::Entry& other = grid.entries_[slot - step];
-        if (other.cell == self.cell) examine(other);
-      }
-      if (above && examined < kMaxBodyCandidates) {
-        const BodyGrid::Entry& other = grid.entries_[slot + step];
-        if (other.cell == self.cell) examine(other);
-      }
+      if (below) examine(grid.entries_[slot - step]);
+      if (above && examined < kMaxBodyCandidates) examine(grid.entries_[slot + step]);
     }
-    // Then the 26 neighbouring cells.
+    // Then the 26 cells around it.
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
           if ((dx == 0 && dy == 0 && dz == 0) || examined >= kMaxBodyCandidates) continue;
-          const std::array<std::int32_t, 3> cell{self.cell[0] + dx, self.cell[1] + dy,
-                                                 self.cell[2] + dz};
-          const std::uint32_t b = bucketOf(cell, grid.bucketMask_);
-          for (std::uint32_t e = grid.bucketStart_[b];
-               e < grid.bucketStart_[b + 1] && examined < kMaxBodyCandidates; ++e)
-            if (grid.entries_[e].cell == cell) examine(grid.entries_[e]);
+          const BodyGrid::Cell& cell =
+              grid.cells_[grid.find(grid.keyOf(self.position, dx, dy, dz))];
+          for (std::uint32_t e = cell.first;
+               e < cell.first + cell.count && examined < kMaxBodyCandidates; ++e)
+            examine(grid.entries_[e]);
         }
 
     const std::span<const Pusher> pushers = nearest.all();
@@ -180,9 +188,13 @@ void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> b
     // into a jump over the other's shoulder.
     Vec3 push = Vec3::Zero();
     for (const Pusher& p : pushers) {
-      push += (0.5f * p.overlap + 0.5f * body.settings.skin) * p.away;
-      const float closing = body.velocity.dot(p.away);
-      if (closing < 0) body.velocity -= closing * p.away;
+      const Vec3 level(p.apart.x(), 0, p.apart.z());
+      const float length = level.norm();
+      const Vec3 away = p.distance > 0 && length > 1e-6f ? Vec3(level / length)
+                                                         : tieBreakDirection(self.body, p.body);
+      push += (0.5f * p.overlap + 0.5f * body.settings.skin) * away;
+      const float closing = body.velocity.dot(away);
+      if (closing < 0) body.velocity -= closing * away;
     }
     const SlideResult slide =
         slideAgainstLevel(world, body.position, body.position + push, body.radii, body.settings,

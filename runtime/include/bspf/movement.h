@@ -189,14 +189,22 @@ class BodyGrid {
     Vec3 position;
     EllipsoidRadii radii;
     std::uint32_t body;
-    std::array<std::int32_t, 3> cell;
   };
+  struct Cell {
+    std::uint64_t key;    ///< packed cell coordinates; kFree when unused
+    std::uint32_t first;  ///< its entries: [first, first + count)
+    std::uint32_t count;
+  };
+  static constexpr std::uint64_t kFree = ~std::uint64_t(0);
+  std::uint64_t keyOf(const Vec3& position, int dx = 0, int dy = 0, int dz = 0) const;
+  /// The table slot of `key` when a body is in that cell, else of a free slot.
+  std::uint32_t find(std::uint64_t key) const;
+
   float cellWidth_ = 1, cellHeight_ = 1;
-  std::uint32_t bucketMask_ = 0;
-  std::vector<Entry> entries_;              ///< by bucket, then body index
-  std::vector<std::uint32_t> bucketStart_;  ///< entries of bucket b: [start[b], start[b + 1])
-  std::vector<std::uint32_t> slotOf_;       ///< body index -> its entry
-  std::vector<std::uint32_t> bucketOf_;     ///< body index -> its bucket (while building)
+  std::vector<Cell> cells_;            ///< open addressing, a power of 2 long
+  std::vector<Entry> entries_;         ///< by cell, body index order within a cell
+  std::vector<std::uint32_t> slotOf_;  ///< body index -> its entry
+  std::vector<std::uint32_t> cellOf_;  ///< body index -> its slot in cells_
 };
 
 /// Per-thread scratch for the step. Reusable across worlds and frames; it
