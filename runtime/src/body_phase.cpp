@@ -16,17 +16,6 @@ namespace bspf {
 
 namespace {
 
-// One coordinate of a cell, 21 bits: 2 million cells along each axis, about
-// 1,900 km of 0.9 m cells. Beyond (or not a number), bodies share the edge
-// cells: still correct, as every pair found is tested for overlap, only
-// slower.
-std::uint64_t cellCoordinate(float v, float cell, int offset) {
-  constexpr float kHalfRange = float(1 << 20);
-  float c = std::floor(v / cell) + float(offset);
-  c = c > -kHalfRange ? (c < kHalfRange - 1 ? c : kHalfRange - 1) : -kHalfRange;
-  return std::uint64_t(std::int64_t(c) + (1 << 20));
-}
-
 // The horizontal direction along which bodies `self` and `other` part when
 // their centres give none (the same point, or one right above the other):
 // fixed by the pair, opposite for the two, and spread around the circle over
@@ -76,27 +65,51 @@ class NearestPushers {
 
 }  // namespace
 
-std::uint64_t BodyGrid::keyOf(const Vec3& p, int dx, int dy, int dz) const {
-  return cellCoordinate(p.x(), cellWidth_, dx) << 42 |
-         cellCoordinate(p.y(), cellHeight_, dy) << 21 | cellCoordinate(p.z(), cellWidth_, dz);
+std::array<std::int64_t, 3> BodyGrid::cellOf(const Vec3& p, std::array<int, 3>* nearerSide) const {
+  const Vec3 scaled(p.x() / cellWidth_, p.y() / cellHeight_, p.z() / cellWidth_);
+  std::array<std::int64_t, 3> cell;
+  for (int axis = 0; axis < 3; ++axis) {
+    const float c = std::floor(scaled[axis]);
+    // Far beyond any level (or not a number), bodies share the edge cells of
+    // keyOf: still correct, as every pair found is tested for overlap.
+    cell[axis] = c > -1e9f && c < 1e9f ? std::int64_t(c) : 0;
+    if (nearerSide) (*nearerSide)[axis] = scaled[axis] - c < 0.5f ? -1 : 1;
+  }
+  return cell;
+}
+
+std::uint64_t BodyGrid::keyOf(const std::array<std::int64_t, 3>& cell) {
+  // 21 bits a coordinate: 2 million cells along each axis, about 1,900 km of
+  // 0.9 m cells.
+  constexpr std::int64_t kHalfRange = 1 << 20;
+  auto bits = [](std::int64_t c) {
+    return std::uint64_t(std::clamp(c, -kHalfRange, kHalfRange - 1) + kHalfRange);
+  };
+  return bits(cell[0]) << 42 | bits(cell[1]) << 21 | bits(cell[2]);
 }
 
 std::uint32_t BodyGrid::find(std::uint64_t key) const {
   const std::uint32_t mask = std::uint32_t(cells_.size() - 1);
-  std::uint64_t h = key * 0x9e3779b97f4a7c15ull;
-  std::uint32_t slot = std::uint32_t(h >> 40) & mask;
+  // splitmix64's finaliser: neighbouring cells differ in a few low bits of
+  // each coordinate, which a plain multiplication spreads poorly.
+  std::uint64_t h = (key ^ (key >> 30)) * 0xbf58476d1ce4e5b9ull;
+  h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
+  std::uint32_t slot = std::uint32_t(h ^ (h >> 31)) & mask;
   while (cells_[slot].key != key && cells_[slot].key != kFree) slot = (slot + 1) & mask;
   return slot;
 }
 
 void BodyGrid::build(std::span<const Body> bodies) {
   const std::size_t n = bodies.size();
-  // Cells as wide as the widest body and as tall as the tallest: the centres
-  // of two overlapping bodies are then less than one cell apart on each axis.
+  // Cells twice as wide as the widest body and twice as tall as the tallest:
+  // the centres of two overlapping bodies are then less than half a cell
+  // apart on each axis, so a body's overlaps lie in its own cell and the
+  // neighbour on the nearer side along each axis (8 cells, not 27: each
+  // look-up is a likely cache miss).
   cellWidth_ = cellHeight_ = 0;
   for (const Body& b : bodies) {
-    cellWidth_ = std::max(cellWidth_, 2 * b.radii.xz);
-    cellHeight_ = std::max(cellHeight_, 2 * b.radii.y);
+    cellWidth_ = std::max(cellWidth_, 4 * b.radii.xz);
+    cellHeight_ = std::max(cellHeight_, 4 * b.radii.y);
   }
   if (!(cellWidth_ > 0)) cellWidth_ = 1;
   if (!(cellHeight_ > 0)) cellHeight_ = 1;
@@ -107,13 +120,13 @@ void BodyGrid::build(std::span<const Body> bodies) {
 
   // A counting sort by cell: count, lay the cells out in table order, place
   // each body in its cell's next place (stable: index order within a cell).
-  cellOf_.resize(n);
+  cellSlot_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const std::uint64_t key = keyOf(bodies[i].position);
+    const std::uint64_t key = keyOf(cellOf(bodies[i].position));
     const std::uint32_t slot = find(key);
     cells_[slot].key = key;
     ++cells_[slot].count;
-    cellOf_[i] = slot;
+    cellSlot_[i] = slot;
   }
   std::uint32_t laid = 0;
   for (Cell& c : cells_) {
@@ -123,7 +136,7 @@ void BodyGrid::build(std::span<const Body> bodies) {
   entries_.resize(n);
   slotOf_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    Cell& c = cells_[cellOf_[i]];
+    Cell& c = cells_[cellSlot_[i]];
     slotOf_[i] = c.first++;
     entries_[slotOf_[i]] = {bodies[i].position, bodies[i].radii, std::uint32_t(i)};
   }
@@ -160,7 +173,7 @@ void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> b
     // Its own cell first, outwards from its own place (a cell's bodies sit
     // in index order): in a pile larger than the candidate cap, each body
     // meets the bodies nearest it in index order, not all the same few.
-    const BodyGrid::Cell& own = grid.cells_[grid.cellOf_[i]];
+    const BodyGrid::Cell& own = grid.cells_[grid.cellSlot_[i]];
     const std::uint32_t slot = grid.slotOf_[i];
     for (std::uint32_t step = 1; examined < kMaxBodyCandidates; ++step) {
       const bool below = slot >= own.first + step, above = slot + step < own.first + own.count;
@@ -168,17 +181,17 @@ void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> b
       if (below) examine(grid.entries_[slot - step]);
       if (above && examined < kMaxBodyCandidates) examine(grid.entries_[slot + step]);
     }
-    // Then the 26 cells around it.
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          if ((dx == 0 && dy == 0 && dz == 0) || examined >= kMaxBodyCandidates) continue;
-          const BodyGrid::Cell& cell =
-              grid.cells_[grid.find(grid.keyOf(self.position, dx, dy, dz))];
-          for (std::uint32_t e = cell.first;
-               e < cell.first + cell.count && examined < kMaxBodyCandidates; ++e)
-            examine(grid.entries_[e]);
-        }
+    // Then the 7 other cells that may hold an overlapping body.
+    std::array<int, 3> side;
+    const std::array<std::int64_t, 3> cell = grid.cellOf(self.position, &side);
+    for (int corner = 1; corner < 8 && examined < kMaxBodyCandidates; ++corner) {
+      const BodyGrid::Cell& around = grid.cells_[grid.find(BodyGrid::keyOf(
+          {cell[0] + (corner & 1 ? side[0] : 0), cell[1] + (corner & 2 ? side[1] : 0),
+           cell[2] + (corner & 4 ? side[2] : 0)}))];
+      for (std::uint32_t e = around.first;
+           e < around.first + around.count && examined < kMaxBodyCandidates; ++e)
+        examine(grid.entries_[e]);
+    }
 
     const std::span<const Pusher> pushers = nearest.all();
     if (pushers.empty()) continue;

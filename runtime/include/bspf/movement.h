@@ -168,10 +168,11 @@ void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> b
                      std::span<StepReport> reports = {});
 
 /// The broad phase of the body-against-body phase: a snapshot of the bodies'
-/// centres and radii, hashed by grid cell (cells as wide as the widest body
-/// and as tall as the tallest, so overlapping bodies sit in the same or
-/// neighbouring cells). Reusable across frames; it allocates only while
-/// growing.
+/// centres and radii in a grid of cells twice as wide as the widest body and
+/// twice as tall as the tallest, found through a hash table of the occupied
+/// cells. A body overlaps only bodies of its own cell and of the neighbours
+/// on the sides of the cell's middle it lies: 8 cells. Reusable across
+/// frames; it allocates only while growing.
 class BodyGrid {
  public:
   /// Snapshots `bodies` (after their move against the level, before any
@@ -196,15 +197,21 @@ class BodyGrid {
     std::uint32_t count;
   };
   static constexpr std::uint64_t kFree = ~std::uint64_t(0);
-  std::uint64_t keyOf(const Vec3& position, int dx = 0, int dy = 0, int dz = 0) const;
+  /// The cell holding `position`, as integer coordinates; `nearerSide`, when
+  /// given, gets for each axis the neighbouring cell (-1 or +1) on the side
+  /// of the cell's middle the position lies.
+  std::array<std::int64_t, 3> cellOf(const Vec3& position,
+                                     std::array<int, 3>* nearerSide = nullptr) const;
+  /// A cell's coordinates packed into a table key.
+  static std::uint64_t keyOf(const std::array<std::int64_t, 3>& cell);
   /// The table slot of `key` when a body is in that cell, else of a free slot.
   std::uint32_t find(std::uint64_t key) const;
 
   float cellWidth_ = 1, cellHeight_ = 1;
-  std::vector<Cell> cells_;            ///< open addressing, a power of 2 long
-  std::vector<Entry> entries_;         ///< by cell, body index order within a cell
-  std::vector<std::uint32_t> slotOf_;  ///< body index -> its entry
-  std::vector<std::uint32_t> cellOf_;  ///< body index -> its slot in cells_
+  std::vector<Cell> cells_;              ///< open addressing, a power of 2 long
+  std::vector<Entry> entries_;           ///< by cell, body index order within a cell
+  std::vector<std::uint32_t> slotOf_;    ///< body index -> its entry
+  std::vector<std::uint32_t> cellSlot_;  ///< body index -> its slot in cells_
 };
 
 /// Per-thread scratch for the step. Reusable across worlds and frames; it
