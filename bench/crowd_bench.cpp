@@ -7,6 +7,9 @@
 // Then the pile: 10,000 bodies dropped at one point, the worst case of the
 // body phase, timed per frame (stepBodies whole). Then the crowd of 1,024 on
 // 1 to `--threads` threads (default 2): stepBodies with a ThreadPool.
+// With `--level LEVEL.bspf --spawns FILE`, also the walkers crowd (64 and
+// 1,024 agents from the spawn points, samples/walkers_sim.h) on that level,
+// its two phases timed apart as above.
 // Prints one JSON object per case; times are medians over frames.
 #include <bspf/movement.h>
 #include <bspf/thread_pool.h>
@@ -20,6 +23,7 @@
 #include <vector>
 
 #include "support/mesh_blob.h"
+#include "walkers_sim.h"
 
 namespace {
 
@@ -47,12 +51,68 @@ void walkingCrowd(int side, std::vector<bspf::Body>& bodies, std::vector<bspf::V
   }
 }
 
+// One frame's two phases, timed apart; adds ns per body to the lists.
+void timePhases(const bspf::World& world, std::vector<bspf::Body>& bodies,
+                const std::vector<bspf::Vec3>& forces, float dt, bspf::StepScratch& scratch,
+                std::vector<bspf::StepReport>& reports, std::vector<double>& levelNs,
+                std::vector<double>& bodyNs) {
+  const double n = double(bodies.size());
+  const auto start = Clock::now();
+  bspf::stepBodiesAgainstLevel(world, bodies, forces, dt, scratch, reports);
+  const auto levelDone = Clock::now();
+  scratch.bodyGrid.build(bodies);
+  bspf::pushBodiesApart(world, scratch.bodyGrid, bodies, 0, bodies.size(), scratch, reports);
+  const auto stop = Clock::now();
+  levelNs.push_back(nanoseconds(start, levelDone) / n);
+  bodyNs.push_back(nanoseconds(levelDone, stop) / n);
+}
+
+// The walkers crowd on a real level: agents from its spawn points.
+void walkersOnLevel(const char* levelPath, const char* spawnsPath) {
+  const bspf::OpenResult opened = bspf::openWorld(levelPath);
+  const bspf::walkers::Points spawns = bspf::walkers::loadSpawns(spawnsPath);
+  if (!opened || !spawns) {
+    std::fprintf(stderr, "bspf_crowd_bench: cannot open %s or %s\n", levelPath, spawnsPath);
+    return;
+  }
+  for (const int agents : {64, 1024}) {
+    const bspf::walkers::Options options;
+    std::vector<bspf::Body> bodies(agents);
+    std::vector<bspf::walkers::RandomWalk> walks;
+    const auto starts = bspf::walkers::startsFromSpawns(spawns.points, agents);
+    for (int i = 0; i < agents; ++i) {
+      bodies[i].position = starts[i];
+      bodies[i].radii = options.radii;
+      bodies[i].settings.maxHorizontalSpeed = options.speed;
+      walks.emplace_back(bspf::walkers::streamSeed(options.seed, i + 1));
+    }
+    std::vector<bspf::Vec3> forces(agents);
+    std::vector<bspf::StepReport> reports(agents);
+    bspf::StepScratch scratch;
+    std::vector<double> levelNs, bodyNs;
+    for (int frame = 0; frame < 600; ++frame) {
+      for (int i = 0; i < agents; ++i) forces[i] = walks[i].nextForce(options.speed, options.dt);
+      timePhases(*opened.world, bodies, forces, options.dt, scratch, reports, levelNs, bodyNs);
+    }
+    std::printf(
+        "{\"case\":\"walkers\",\"level\":\"%s\",\"bodies\":%d,\"level_phase_ns\":%.0f,"
+        "\"body_phase_ns\":%.0f,\"body_phase_share\":%.3f}\n",
+        levelPath, agents, median(levelNs), median(bodyNs),
+        median(bodyNs) / (median(levelNs) + median(bodyNs)));
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   int maxThreads = 2;
-  for (int a = 1; a + 1 < argc; ++a)
+  const char *levelPath = nullptr, *spawnsPath = nullptr;
+  for (int a = 1; a + 1 < argc; ++a) {
     if (std::strcmp(argv[a], "--threads") == 0) maxThreads = std::max(1, std::atoi(argv[a + 1]));
+    if (std::strcmp(argv[a], "--level") == 0) levelPath = argv[a + 1];
+    if (std::strcmp(argv[a], "--spawns") == 0) spawnsPath = argv[a + 1];
+  }
+  if (levelPath && spawnsPath) walkersOnLevel(levelPath, spawnsPath);
   constexpr float kDt = 1.0f / 60;
   constexpr int kFrames = 120;
   // A 400 m square floor slab, compiled in memory.
@@ -69,15 +129,8 @@ int main(int argc, char** argv) {
     std::vector<double> levelNs, bodyNs, stepNs;
     double contacts = 0;
     for (int frame = 0; frame < kFrames; ++frame) {
-      const auto start = Clock::now();
-      bspf::stepBodiesAgainstLevel(world, bodies, forces, kDt, scratch, reports);
-      const auto levelDone = Clock::now();
-      scratch.bodyGrid.build(bodies);
-      bspf::pushBodiesApart(world, scratch.bodyGrid, bodies, 0, n, scratch, reports);
-      const auto stop = Clock::now();
-      levelNs.push_back(nanoseconds(start, levelDone) / double(n));
-      bodyNs.push_back(nanoseconds(levelDone, stop) / double(n));
-      stepNs.push_back(nanoseconds(start, stop) / double(n));
+      timePhases(world, bodies, forces, kDt, scratch, reports, levelNs, bodyNs);
+      stepNs.push_back(levelNs.back() + bodyNs.back());
       for (const auto& r : reports) contacts += r.bodyContacts;
     }
     std::printf(
