@@ -1,46 +1,186 @@
-// bspf_crowd_bench: how the body-against-body broad phase scales. Bodies
-// stand on a flat floor at constant density (one per 1.5 m square, touching
-// neighbours now and then as they walk), and the time of stepBodies per body
-// is measured for growing crowds. A linear broad phase keeps it flat.
-// Prints one JSON object per crowd size.
+// bspf_crowd_bench: how the body-against-body phase scales. Bodies stand on
+// a flat floor at constant density (one per 1.5 m square, touching
+// neighbours now and then as they walk), 64 to 16,384 of them; each frame's
+// two phases are timed apart (the level phase, stepBodiesAgainstLevel; the
+// body phase, BodyGrid::build plus pushBodiesApart), so the body phase's
+// share of the step shows. A linear body phase keeps its time per body flat.
+// Then the pile: 10,000 bodies dropped at one point, the worst case of the
+// body phase, timed per frame (stepBodies whole). Then the crowd of 1,024 on
+// 1 to `--threads` threads (default 2): stepBodies with a ThreadPool.
+// With `--level LEVEL.bspf --spawns FILE`, also the walkers crowd (64 and
+// 1,024 agents from the spawn points, samples/walkers_sim.h) on that level,
+// its two phases timed apart as above.
+// Prints one JSON object per case; times are medians over frames.
 #include <bspf/movement.h>
+#include <bspf/thread_pool.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <vector>
 
 #include "support/mesh_blob.h"
+#include "walkers_sim.h"
 
-int main() {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double nanoseconds(Clock::time_point from, Clock::time_point to) {
+  return std::chrono::duration<double, std::nano>(to - from).count();
+}
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  return values[values.size() / 2];
+}
+
+// `side` x `side` walkers on a 1.5 m grid, each walking its own way.
+void walkingCrowd(int side, std::vector<bspf::Body>& bodies, std::vector<bspf::Vec3>& forces) {
+  const int n = side * side;
+  bodies.assign(n, {});
+  forces.resize(n);
+  for (int i = 0; i < n; ++i) {
+    bodies[i].position = bspf::Vec3(1.5f * (i % side), 0.851f, 1.5f * (i / side));
+    bodies[i].radii = {0.45f, 0.85f};
+    const float angle = 2.399963f * i;  // golden angle: directions spread evenly
+    forces[i] = bspf::Vec3(std::cos(angle), 0, std::sin(angle)) * 20.0f;
+  }
+}
+
+// One frame's two phases, timed apart; adds ns per body to the lists.
+void timePhases(const bspf::World& world, std::vector<bspf::Body>& bodies,
+                const std::vector<bspf::Vec3>& forces, float dt, bspf::StepScratch& scratch,
+                std::vector<bspf::StepReport>& reports, std::vector<double>& levelNs,
+                std::vector<double>& bodyNs) {
+  const double n = double(bodies.size());
+  const auto start = Clock::now();
+  bspf::stepBodiesAgainstLevel(world, bodies, forces, dt, scratch, reports);
+  const auto levelDone = Clock::now();
+  scratch.bodyGrid.build(bodies);
+  bspf::pushBodiesApart(world, scratch.bodyGrid, bodies, 0, bodies.size(), scratch, reports);
+  const auto stop = Clock::now();
+  levelNs.push_back(nanoseconds(start, levelDone) / n);
+  bodyNs.push_back(nanoseconds(levelDone, stop) / n);
+}
+
+// The walkers crowd on a real level: agents from its spawn points.
+void walkersOnLevel(const char* levelPath, const char* spawnsPath) {
+  const bspf::OpenResult opened = bspf::openWorld(levelPath);
+  const bspf::walkers::Points spawns = bspf::walkers::loadSpawns(spawnsPath);
+  if (!opened || !spawns) {
+    std::fprintf(stderr, "bspf_crowd_bench: cannot open %s or %s\n", levelPath, spawnsPath);
+    return;
+  }
+  for (const int agents : {64, 1024}) {
+    const bspf::walkers::Options options;
+    std::vector<bspf::Body> bodies(agents);
+    std::vector<bspf::walkers::RandomWalk> walks;
+    const auto starts = bspf::walkers::startsFromSpawns(spawns.points, agents);
+    for (int i = 0; i < agents; ++i) {
+      bodies[i].position = starts[i];
+      bodies[i].radii = options.radii;
+      bodies[i].settings.maxHorizontalSpeed = options.speed;
+      walks.emplace_back(bspf::walkers::streamSeed(options.seed, i + 1));
+    }
+    std::vector<bspf::Vec3> forces(agents);
+    std::vector<bspf::StepReport> reports(agents);
+    bspf::StepScratch scratch;
+    std::vector<double> levelNs, bodyNs;
+    for (int frame = 0; frame < 600; ++frame) {
+      for (int i = 0; i < agents; ++i) forces[i] = walks[i].nextForce(options.speed, options.dt);
+      timePhases(*opened.world, bodies, forces, options.dt, scratch, reports, levelNs, bodyNs);
+    }
+    std::printf(
+        "{\"case\":\"walkers\",\"level\":\"%s\",\"bodies\":%d,\"level_phase_ns\":%.0f,"
+        "\"body_phase_ns\":%.0f,\"body_phase_share\":%.3f}\n",
+        levelPath, agents, median(levelNs), median(bodyNs),
+        median(bodyNs) / (median(levelNs) + median(bodyNs)));
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int maxThreads = 2;
+  const char *levelPath = nullptr, *spawnsPath = nullptr;
+  for (int a = 1; a + 1 < argc; ++a) {
+    if (std::strcmp(argv[a], "--threads") == 0) maxThreads = std::max(1, std::atoi(argv[a + 1]));
+    if (std::strcmp(argv[a], "--level") == 0) levelPath = argv[a + 1];
+    if (std::strcmp(argv[a], "--spawns") == 0) spawnsPath = argv[a + 1];
+  }
+  if (levelPath && spawnsPath) walkersOnLevel(levelPath, spawnsPath);
+  constexpr float kDt = 1.0f / 60;
+  constexpr int kFrames = 120;
   // A 400 m square floor slab, compiled in memory.
   const bspf::bench::CompiledLevel floor(bspf::bench::floorMesh(200.0), {}, "floor");
+  const bspf::World& world = floor.world();
+
   for (const int side : {8, 16, 32, 64, 128}) {
-    const int n = side * side;
-    std::vector<bspf::Body> bodies(n);
-    std::vector<bspf::Vec3> forces(n);
-    for (int i = 0; i < n; ++i) {
-      bodies[i].position = bspf::Vec3(1.5f * (i % side), 0.851f, 1.5f * (i / side));
-      bodies[i].radii = {0.45f, 0.85f};
-      const float angle = 2.399963f * i;  // golden angle: directions spread evenly
-      forces[i] = bspf::Vec3(std::cos(angle), 0, std::sin(angle)) * 20.0f;
-    }
+    std::vector<bspf::Body> bodies;
+    std::vector<bspf::Vec3> forces;
+    walkingCrowd(side, bodies, forces);
+    const std::size_t n = bodies.size();
     bspf::StepScratch scratch;
     std::vector<bspf::StepReport> reports(n);
-    std::vector<double> nsPerBody;
+    std::vector<double> levelNs, bodyNs, stepNs;
     double contacts = 0;
-    for (int frame = 0; frame < 120; ++frame) {
-      const auto start = std::chrono::steady_clock::now();
-      bspf::stepBodies(floor.world(), bodies, forces, 1.0f / 60, scratch, reports);
-      const auto stop = std::chrono::steady_clock::now();
-      nsPerBody.push_back(std::chrono::duration<double, std::nano>(stop - start).count() / n);
+    for (int frame = 0; frame < kFrames; ++frame) {
+      timePhases(world, bodies, forces, kDt, scratch, reports, levelNs, bodyNs);
+      stepNs.push_back(levelNs.back() + bodyNs.back());
       for (const auto& r : reports) contacts += r.bodyContacts;
     }
-    std::sort(nsPerBody.begin(), nsPerBody.end());
-    std::printf("{\"bodies\":%d,\"ns_per_body_step\":%.0f,\"body_contacts_per_step\":%.3f}\n", n,
-                nsPerBody[nsPerBody.size() / 2], contacts / (120.0 * n));
+    std::printf(
+        "{\"case\":\"walking crowd\",\"bodies\":%zu,\"ns_per_body_step\":%.0f,"
+        "\"level_phase_ns\":%.0f,\"body_phase_ns\":%.0f,\"body_phase_share\":%.3f,"
+        "\"body_contacts_per_step\":%.3f}\n",
+        n, median(stepNs), median(levelNs), median(bodyNs), median(bodyNs) / median(stepNs),
+        contacts / (double(kFrames) * double(n)));
+  }
+
+  {
+    const int n = 10000;
+    const bspf::Vec3 point(0, 0.86f, 0);
+    std::vector<bspf::Body> bodies(n);
+    for (bspf::Body& b : bodies) b.position = point;
+    const std::vector<bspf::Vec3> forces(n, bspf::Vec3::Zero());
+    std::vector<bspf::StepReport> reports(n);
+    bspf::StepScratch scratch;
+    std::vector<double> frameMs;
+    for (int frame = 0; frame < 60; ++frame) {
+      const auto start = Clock::now();
+      bspf::stepBodies(world, bodies, forces, kDt, scratch, reports);
+      frameMs.push_back(nanoseconds(start, Clock::now()) * 1e-6);
+    }
+    float spread = 0;
+    for (const bspf::Body& b : bodies)
+      spread = std::max(spread, std::hypot(b.position.x(), b.position.z()));
+    std::printf(
+        "{\"case\":\"pile at one point\",\"bodies\":%d,\"first_frame_ms\":%.2f,"
+        "\"median_frame_ms\":%.2f,\"max_frame_ms\":%.2f,\"spread_after_60_frames_m\":%.1f}\n",
+        n, frameMs.front(), median(frameMs), *std::max_element(frameMs.begin(), frameMs.end()),
+        spread);
+  }
+
+  for (int threads = 1; threads <= maxThreads; ++threads) {
+    std::vector<bspf::Body> bodies;
+    std::vector<bspf::Vec3> forces;
+    walkingCrowd(32, bodies, forces);
+    bspf::ThreadPool pool(threads);
+    std::vector<bspf::StepScratch> scratches(threads);
+    std::vector<bspf::StepReport> reports(bodies.size());
+    std::vector<double> stepNs;
+    for (int frame = 0; frame < kFrames; ++frame) {
+      const auto start = Clock::now();
+      bspf::stepBodies(world, bodies, forces, kDt, pool, scratches, reports);
+      stepNs.push_back(nanoseconds(start, Clock::now()) / double(bodies.size()));
+    }
+    std::printf(
+        "{\"case\":\"thread pool\",\"bodies\":%zu,\"threads\":%d,\"ns_per_body_step\":%.0f}\n",
+        bodies.size(), threads, median(stepNs));
   }
   return 0;
 }

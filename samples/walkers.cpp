@@ -3,7 +3,7 @@
 //
 //   walkers LEVEL.bspf [--spawns FILE] [--agents N] [--frames F] [--speed M_PER_S]
 //           [--seed K] [--dt S] [--radius-xz R] [--radius-y R] [--method planes|exact]
-//           [--step-height M]
+//           [--step-height M] [--threads N]
 //           [--trace OUT.csv] [--json]
 //           [--brushes FILE]
 //
@@ -95,6 +95,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--step-height", options.stepHeight,
                  "Highest ledge a walking agent steps up onto, m (0: off, as in the article)")
+      ->capture_default_str();
+  app.add_option("--threads", options.threads,
+                 "Threads stepping the crowd (a thread pool; same trajectories for any number)")
       ->capture_default_str();
   app.add_option("--trace", tracePath,
                  "Write 'frame,agent,x,y,z' (every centre after every frame) to this CSV");
@@ -215,8 +218,8 @@ int main(int argc, char** argv) {
         << (options.method == bspf::CollisionMethod::Planes ? "planes" : "exact") << "\""
         << ", \"step_height\": " << options.stepHeight << ", \"radius_xz\": " << options.radii.xz
         << ", \"radius_y\": " << options.radii.y << ", \"seed\": " << options.seed
-        << ", \"steps\": " << s.steps << ", \"ns_per_step\": " << s.nsPerStep
-        << ", \"refused_moves\": " << s.refusedMoves
+        << ", \"threads\": " << options.threads << ", \"steps\": " << s.steps
+        << ", \"ns_per_step\": " << s.nsPerStep << ", \"refused_moves\": " << s.refusedMoves
         << ", \"iterations_mean\": " << s.iterationsMean
         << ", \"iterations_max\": " << s.iterationsMax
         << ", \"grounded_fraction\": " << s.groundedFraction
@@ -228,9 +231,10 @@ int main(int argc, char** argv) {
         << "}\n";
     std::cout << out.str();
   } else {
-    std::printf("walkers: %s: %d agents x %d frames at %g m/s (dt %g s, placement %s)\n",
-                levelPath.c_str(), options.agents, options.frames, double(options.speed),
-                double(options.dt), spawnsPath.empty() ? "on floor" : "from spawns");
+    std::printf(
+        "walkers: %s: %d agents x %d frames at %g m/s (dt %g s, placement %s, %d threads)\n",
+        levelPath.c_str(), options.agents, options.frames, double(options.speed),
+        double(options.dt), spawnsPath.empty() ? "on floor" : "from spawns", options.threads);
     std::printf("  %lld steps, %.0f ns per step (median frame)\n", s.steps, s.nsPerStep);
     std::printf("  refused moves %lld, slides per step %.3f (max %d), grounded %.1f%%\n",
                 s.refusedMoves, s.iterationsMean, s.iterationsMax, 100 * s.groundedFraction);

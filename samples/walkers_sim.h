@@ -16,6 +16,7 @@
 
 #include <bspf/movement.h>
 #include <bspf/query.h>
+#include <bspf/thread_pool.h>
 #include <bspf/world.h>
 
 #include <algorithm>
@@ -26,6 +27,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <span>
 #include <sstream>
@@ -48,6 +50,9 @@ struct Options {
   /// MovementSettings::maxStepHeight, metres: 0 (off) by default.
   float stepHeight = 0.0f;
   std::uint64_t seed = 1;
+  /// Threads stepping the crowd (a bspf::ThreadPool); the trajectories are
+  /// the same for any number.
+  int threads = 1;
 };
 
 /// An empty string when `options` can run, else what is wrong with them.
@@ -69,6 +74,8 @@ inline std::string validate(const Options& o) {
     return "--radius-xz must be > 0 and at most 100 m (got " + text(o.radii.xz) + ")";
   if (!positive(o.radii.y) || o.radii.y > 100)
     return "--radius-y must be > 0 and at most 100 m (got " + text(o.radii.y) + ")";
+  if (o.threads < 1 || o.threads > 256)
+    return "--threads must be 1 to 256 (got " + std::to_string(o.threads) + ")";
   if (!std::isfinite(o.stepHeight) || o.stepHeight < 0 || o.stepHeight > 2 * o.radii.y)
     return "--step-height must be 0 to twice --radius-y (got " + text(o.stepHeight) + ")";
   return {};
@@ -378,7 +385,10 @@ class Simulation {
  public:
   /// Precondition: validate(options) is empty and starts.size() == agents.
   Simulation(const World& world, std::span<const Vec3> starts, const Options& options)
-      : world_(&world), options_(options) {
+      : world_(&world),
+        options_(options),
+        pool_(std::make_unique<ThreadPool>(options.threads)),
+        scratches_(std::size_t(options.threads)) {
     bodies_.resize(starts.size());
     agents_.resize(starts.size());
     forces_.assign(starts.size(), Vec3::Zero());
@@ -395,7 +405,8 @@ class Simulation {
   }
 
   /// Advances every agent by one frame: turns the agents whose walk is up,
-  /// then one stepBodies call, the only part timed.
+  /// then one stepBodies call (on options.threads threads), the only part
+  /// timed.
   /// `beforeStep`, when given, sees the bodies and their forces just before
   /// the timed stepBodies call (for measurements from the same state).
   void step(
@@ -404,7 +415,7 @@ class Simulation {
       forces_[i] = agents_[i].nextForce(options_.speed, options_.dt);
     if (beforeStep) beforeStep(bodies_, forces_);
     const auto start = std::chrono::steady_clock::now();
-    stepBodies(*world_, bodies_, forces_, options_.dt, scratch_, reports_);
+    stepBodies(*world_, bodies_, forces_, options_.dt, *pool_, scratches_, reports_);
     const auto stop = std::chrono::steady_clock::now();
     frameNsPerStep_.push_back(std::chrono::duration<double, std::nano>(stop - start).count() /
                               double(bodies_.size()));
@@ -450,7 +461,8 @@ class Simulation {
   std::vector<RandomWalk> agents_;
   std::vector<Vec3> forces_;
   std::vector<StepReport> reports_;
-  StepScratch scratch_;
+  std::unique_ptr<ThreadPool> pool_;    // created once, reused every frame
+  std::vector<StepScratch> scratches_;  // one per pool thread
   std::vector<double> frameNsPerStep_;
   int frame_ = 0;
   long long steps_ = 0, refused_ = 0, iterations_ = 0, grounded_ = 0, bodyContacts_ = 0;

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The whole test suite: install what is needed; build with AddressSanitizer
 # and UndefinedBehaviorSanitizer and run the tests that feed hostile input;
-# then build optimised with assertions on and run every test through ctest
+# build with ThreadSanitizer and run the threading tests; then build optimised with assertions on and run every test through ctest
 # (its summary closes the output).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -17,6 +17,14 @@ if [ "${BSPF_SKIP_SANITIZERS:-0}" != 1 ]; then
   cmake --build build-asan -j"$jobs" --target bspf_tests
   echo "sanitizer run: loader, query, clean, bad-input, movement and stability tests"
   build-asan/tests/bspf_tests "[loader],[query]~[shared-levels],[clean],[bad-input],[movement],[stability]"
+
+  # The thread pool and the parallel step: a data race between the threads
+  # that step a crowd is reported here even when the results happen to match.
+  cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=Debug \
+    -DCMAKE_CXX_FLAGS="-O1 -fsanitize=thread -fno-omit-frame-pointer" >/dev/null
+  cmake --build build-tsan -j"$jobs" --target bspf_tests
+  echo "thread sanitizer run: the threading tests"
+  TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" build-tsan/tests/bspf_tests "[threads]"
 fi
 
 # Optimised, but with assert() live: tests check contracts too.

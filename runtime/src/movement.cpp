@@ -2,12 +2,12 @@
 // velocity, slide against the level, step-up, contact response); stepBodies
 // steps every body, then runs the body-against-body phase.
 #include <bspf/movement.h>
+#include <bspf/thread_pool.h>
 
 #include <algorithm>
 #include <cassert>
 #include <cmath>
 
-#include "body_phase.h"
 #include "slide.h"
 #include "velocity.h"
 
@@ -151,22 +151,69 @@ void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepS
   }
 }
 
-void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3> forces, float dt,
-                StepScratch& scratch, std::span<StepReport> reports) {
+void stepBodiesAgainstLevel(const World& world, std::span<Body> bodies,
+                            std::span<const Vec3> forces, float dt, StepScratch& scratch,
+                            std::span<StepReport> reports) {
   assert(forces.size() == bodies.size());
   assert(reports.empty() || reports.size() == bodies.size());
-  auto reportOf = [&](std::size_t i) { return reports.empty() ? nullptr : &reports[i]; };
-  // Each body keeps its own nearby triangles from frame to frame (swapped in,
-  // no copy). A body list reordered by the caller only costs re-queries: a
-  // cache answers only boxes inside the one it queried, whoever asks.
-  if (scratch.bodyNearby_.size() < bodies.size()) scratch.bodyNearby_.resize(bodies.size());
-  for (std::size_t i = 0; i < bodies.size(); ++i) {
-    std::swap(scratch.nearby, scratch.bodyNearby_[i]);
-    stepBody(world, bodies[i], forces[i], dt, scratch, reportOf(i));
-    std::swap(scratch.nearby, scratch.bodyNearby_[i]);
-  }
+  std::vector<NearbyTriangles>& caches = scratch.workspace().bodyNearby;
+  if (caches.size() < bodies.size()) caches.resize(bodies.size());
+  detail::stepRangeAgainstLevel(world, bodies, forces, dt, scratch, reports, caches);
+}
 
-  detail::pushBodiesApart(world, bodies, scratch, reports);
+namespace detail {
+
+void stepRangeAgainstLevel(const World& world, std::span<Body> bodies, std::span<const Vec3> forces,
+                           float dt, StepScratch& scratch, std::span<StepReport> reports,
+                           std::span<NearbyTriangles> caches) {
+  // Each body keeps its own nearby triangles from frame to frame (swapped in,
+  // no copy). A list reordered by the caller only costs re-queries: a cache
+  // answers only boxes inside the one it queried, whoever asks, and the
+  // narrow phases test their candidates in triangle order, so results never
+  // depend on what a cache held.
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    std::swap(scratch.nearby, caches[i]);
+    stepBody(world, bodies[i], forces[i], dt, scratch, reports.empty() ? nullptr : &reports[i]);
+    std::swap(scratch.nearby, caches[i]);
+  }
+}
+
+}  // namespace detail
+
+void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3> forces, float dt,
+                StepScratch& scratch, std::span<StepReport> reports) {
+  stepBodiesAgainstLevel(world, bodies, forces, dt, scratch, reports);
+  scratch.bodyGrid.build(bodies);
+  pushBodiesApart(world, scratch.bodyGrid, bodies, 0, bodies.size(), scratch, reports);
+}
+
+void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3> forces, float dt,
+                ThreadPool& pool, std::span<StepScratch> scratches, std::span<StepReport> reports) {
+  assert(forces.size() == bodies.size());
+  assert(reports.empty() || reports.size() == bodies.size());
+  assert(scratches.size() >= std::size_t(pool.threadCount()));
+  // Small ranges balance the threads (a body against a wall costs several
+  // times one in the open); each range still holds enough work to hide the
+  // hand-out.
+  constexpr std::size_t kBodiesPerRange = 16;
+  // The bodies' caches live in the first scratch, by body index, whichever
+  // thread steps a body (each entry is touched by one thread at a time).
+  std::vector<NearbyTriangles>& caches = scratches[0].workspace().bodyNearby;
+  if (caches.size() < bodies.size()) caches.resize(bodies.size());
+  pool.parallelFor(
+      bodies.size(), kBodiesPerRange, [&](int thread, std::size_t first, std::size_t last) {
+        const std::size_t count = last - first;
+        detail::stepRangeAgainstLevel(world, bodies.subspan(first, count),
+                                      forces.subspan(first, count), dt, scratches[thread],
+                                      reports.empty() ? reports : reports.subspan(first, count),
+                                      std::span(caches).subspan(first, count));
+      });
+  BodyGrid& grid = scratches[0].bodyGrid;
+  grid.build(bodies);
+  pool.parallelFor(bodies.size(), kBodiesPerRange,
+                   [&](int thread, std::size_t first, std::size_t last) {
+                     pushBodiesApart(world, grid, bodies, first, last, scratches[thread], reports);
+                   });
 }
 
 }  // namespace bspf

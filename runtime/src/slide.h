@@ -5,6 +5,7 @@
 
 #include <bspf/movement.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -69,6 +70,11 @@ class LocalCandidates {
       list_.clear();
       for (const CandidateTriangle& c : scratch.nearby.list())
         if (boxesOverlap(c.low, c.high, local_.low, local_.high)) list_.push_back(make_(c));
+      // In triangle order, whatever order the query listed them in (which
+      // depends on the box it was made for): ties in the narrow phases then
+      // resolve the same with a fresh query as with a body's older one.
+      std::sort(list_.begin(), list_.end(),
+                [](const Candidate& a, const Candidate& b) { return a.triangle < b.triangle; });
       scratch.workspace().lastCount = list_.size();
     }
     return list_;

@@ -59,7 +59,18 @@ struct StepWorkspace {
   std::vector<PlanesCandidate> planes;
   std::vector<ExactCandidate> exact;
   std::size_t lastCount = 0;
+  /// Each body's nearby triangles, by index in the bodies stepBodies (or
+  /// stepBodiesAgainstLevel) steps: swapped into StepScratch::nearby for the
+  /// body's step, so each body reuses its own query over frames.
+  std::vector<NearbyTriangles> bodyNearby;
 };
+
+/// Steps bodies[i] against the level with caches[i] as its nearby
+/// triangles (see stepBodiesAgainstLevel). Precondition: caches is at least
+/// as long as bodies.
+void stepRangeAgainstLevel(const World& world, std::span<Body> bodies, std::span<const Vec3> forces,
+                           float dt, StepScratch& scratch, std::span<StepReport> reports,
+                           std::span<NearbyTriangles> caches);
 
 PlanesCandidate makePlanesCandidate(const World& world, const CandidateTriangle& c,
                                     EllipsoidRadii radii);

@@ -15,13 +15,7 @@ namespace {
 
 constexpr float kDt = 1.0f / 60.0f;
 
-// A compiled level kept alive with its World.
-struct Level {
-  bspf::test::AlignedBytes bytes;
-  bspf::World world;
-  explicit Level(const bspc::Mesh& mesh)
-      : bytes(bspf::test::compile(mesh)), world(*bspf::viewWorld(bytes.span()).world) {}
-};
+using Level = bspf::test::CompiledMesh;
 
 bspc::Mesh floorSlab() { return bspf::test::boxMesh({-20, -1, -20}, {20, 0, 20}); }
 

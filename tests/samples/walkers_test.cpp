@@ -253,6 +253,8 @@ TEST_CASE("walkers: spawn files, options, placement and determinism", "[samples]
     REQUIRE_THAT(bspf::walkers::validate(o), Catch::Contains("--step-height"));
     o.stepHeight = 0.35f;
     REQUIRE(bspf::walkers::validate(o).empty());
+    o.threads = 0;
+    REQUIRE_THAT(bspf::walkers::validate(o), Catch::Contains("--threads"));
   }
   SECTION("placement on floor and determinism, on the arena") {
     const Level level = loadLevel(bspf::test::samplesDir(), "arena", dir);
@@ -281,6 +283,9 @@ TEST_CASE("walkers: spawn files, options, placement and determinism", "[samples]
     // The same inputs give the same walk, frame by frame; another seed not.
     bspf::walkers::Simulation a(level.world, placed.points, options);
     bspf::walkers::Simulation b(level.world, placed.points, options);
+    options.threads = 3;  // the thread count changes nothing
+    bspf::walkers::Simulation threaded(level.world, placed.points, options);
+    options.threads = 1;
     options.seed = 6;
     bspf::walkers::Simulation c(level.world, placed.points, options);
     bool differs = false;
@@ -288,8 +293,10 @@ TEST_CASE("walkers: spawn files, options, placement and determinism", "[samples]
       a.step();
       b.step();
       c.step();
+      threaded.step();
       for (std::size_t i = 0; i < placed.points.size(); ++i) {
         REQUIRE(a.bodies()[i].position == b.bodies()[i].position);
+        REQUIRE(a.bodies()[i].position == threaded.bodies()[i].position);
         differs = differs || a.bodies()[i].position != c.bodies()[i].position;
       }
     }

@@ -58,6 +58,14 @@ void append(bspc::Mesh& mesh, const bspc::Mesh& part);
 std::vector<std::uint8_t> compile(const bspc::Mesh& mesh,
                                   const bspc::CompileSettings& settings = {});
 
+/// A mesh compiled in memory, kept alive with its World.
+struct CompiledMesh {
+  AlignedBytes bytes;
+  bspf::World world;
+  explicit CompiledMesh(const bspc::Mesh& mesh)
+      : bytes(compile(mesh)), world(*bspf::viewWorld(bytes.span()).world) {}
+};
+
 /// Compiles samples/NAME.obj with default settings into a temp directory
 /// and opens it (the World keeps its mapping alive).
 bspf::World compileSample(const std::string& name);

@@ -21,9 +21,15 @@
 //      grounded body stopped by something steep may step up onto it
 //      (MovementSettings::maxStepHeight, off by default);
 //   3. contacts update the velocity (slide or bounce) and the ground state.
-// stepBodies then pushes overlapping bodies apart, horizontally (grid broad
-// phase), each push itself a move against the level, so a push never enters
-// a wall.
+// stepBodies then pushes overlapping bodies apart, horizontally (hashed grid
+// broad phase, every push computed from the positions after the level phase,
+// at most kMaxBodyPushes pushers per body), each body's summed push itself
+// one move against the level, so a push never enters a wall.
+//
+// Many cores: stepBodies with a ThreadPool (bspf/thread_pool.h) runs both
+// phases in parallel; a game with its own job system calls the phases itself
+// (stepBodiesAgainstLevel on ranges, BodyGrid::build, pushBodiesApart on
+// ranges). Either way the result is bit-identical to one thread.
 //
 // Thread safety: the World is only read. Scratch is the caller's: use one
 // StepScratch per thread; bodies stepped on different threads must differ.
@@ -126,10 +132,91 @@ struct StepReport {
 };
 
 class StepScratch;
+class BodyGrid;
 namespace detail {
-void pushBodiesApart(const World&, std::span<Body>, StepScratch&, std::span<StepReport>);
 struct StepWorkspace;  // the narrow phases' working lists, private to the runtime
 }  // namespace detail
+
+/// The most other bodies that push one body in one step: the nearest
+/// overlapping ones (ties: lower index first). A body in a dense pile is
+/// pushed by these only, so the body phase's work per body stays bounded.
+inline constexpr int kMaxBodyPushes = 8;
+/// The most other bodies examined as possible pushers of one body in one
+/// step (its own grid cell first, those nearest it in index order first;
+/// then the neighbouring cells). Only a pile of more than this many bodies
+/// within about one body size reaches it.
+inline constexpr int kMaxBodyCandidates = 32;
+
+/// The body-against-body phase for bodies [first, last) of `bodies`: each is
+/// pushed apart from the overlapping bodies of `grid` (at most kMaxBodyPushes
+/// of them, the nearest): by half of each overlap (measured along the line
+/// between centres) plus half its skin, horizontally away from the other,
+/// all summed into one push that is a move against the level, so it never
+/// ends inside a wall. The velocity loses its horizontal closing speed
+/// towards each pusher. Pushes are horizontal so that a crowd never lifts a
+/// body (onto a wall's top, say): bodies do not stand on each other's heads.
+/// Two bodies at the same point, or one right above the other, part along a
+/// horizontal direction fixed by their pair of indices. Adds the push's
+/// contacts and the number of pushers (StepReport::bodyContacts) to
+/// `reports` (empty, or parallel to `bodies`).
+/// Every push is computed from the positions `grid` was built from, not from
+/// bodies already pushed: the result does not depend on the order or the
+/// split of the ranges.
+/// Preconditions: `grid` was built from `bodies` (same size and order), and
+/// [first, last) lies within them.
+/// Thread safety: reads `grid` and writes only bodies[first, last) and
+/// reports[first, last): calls on disjoint ranges may run concurrently, each
+/// with its own scratch, once `grid` is built.
+void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> bodies,
+                     std::size_t first, std::size_t last, StepScratch& scratch,
+                     std::span<StepReport> reports = {});
+
+/// The broad phase of the body-against-body phase: a snapshot of the bodies'
+/// centres and radii in a grid of cells twice as wide as the widest body and
+/// twice as tall as the tallest, found through a hash table of the occupied
+/// cells. A body overlaps only bodies of its own cell and of the neighbours
+/// on the sides of the cell's middle it lies: 8 cells. Reusable across
+/// frames; it allocates only while growing.
+class BodyGrid {
+ public:
+  /// Snapshots `bodies` (after their move against the level, before any
+  /// push). Linear in the number of bodies. Not thread-safe: build it on one
+  /// thread, then share it read-only between the pushBodiesApart calls.
+  void build(std::span<const Body> bodies);
+
+  /// Bodies in the last snapshot.
+  std::size_t size() const { return slotOf_.size(); }
+
+ private:
+  friend void pushBodiesApart(const World&, const BodyGrid&, std::span<Body>, std::size_t,
+                              std::size_t, StepScratch&, std::span<StepReport>);
+  struct Entry {
+    Vec3 position;
+    EllipsoidRadii radii;
+    std::uint32_t body;
+  };
+  struct Cell {
+    std::uint64_t key;    ///< packed cell coordinates; kFree when unused
+    std::uint32_t first;  ///< its entries: [first, first + count)
+    std::uint32_t count;
+  };
+  static constexpr std::uint64_t kFree = ~std::uint64_t(0);
+  /// The cell holding `position`, as integer coordinates; `nearerSide`, when
+  /// given, gets for each axis the neighbouring cell (-1 or +1) on the side
+  /// of the cell's middle the position lies.
+  std::array<std::int64_t, 3> cellOf(const Vec3& position,
+                                     std::array<int, 3>* nearerSide = nullptr) const;
+  /// A cell's coordinates packed into a table key.
+  static std::uint64_t keyOf(const std::array<std::int64_t, 3>& cell);
+  /// The table slot of `key` when a body is in that cell, else of a free slot.
+  std::uint32_t find(std::uint64_t key) const;
+
+  float cellWidth_ = 1, cellHeight_ = 1;
+  std::vector<Cell> cells_;              ///< open addressing, a power of 2 long
+  std::vector<Entry> entries_;           ///< by cell, body index order within a cell
+  std::vector<std::uint32_t> slotOf_;    ///< body index -> its entry
+  std::vector<std::uint32_t> cellSlot_;  ///< body index -> its slot in cells_
+};
 
 /// Per-thread scratch for the step. Reusable across worlds and frames; it
 /// allocates only while growing. Movable, not copyable.
@@ -143,8 +230,11 @@ class StepScratch {
   SweepScratch sweep;
   /// The triangles near the body being moved (see NearbyTriangles): kept
   /// from step to step, so a body stepped alone with its own scratch reuses
-  /// it over frames; stepBodies keeps one per body.
+  /// it over frames; stepBodies and stepBodiesAgainstLevel keep one per body.
   NearbyTriangles nearby;
+  /// The body grid stepBodies builds each frame (the pool overload uses the
+  /// first scratch's).
+  BodyGrid bodyGrid;
 
   /// How many triangles the last slide's narrow phase tested: the nearby
   /// triangles whose box overlaps the slide's (diagnostics).
@@ -153,13 +243,6 @@ class StepScratch {
   detail::StepWorkspace& workspace();
 
  private:
-  friend void detail::pushBodiesApart(const World&, std::span<Body>, StepScratch&,
-                                      std::span<StepReport>);
-  friend void stepBodies(const World&, std::span<Body>, std::span<const Vec3>, float, StepScratch&,
-                         std::span<StepReport>);
-  std::vector<NearbyTriangles> bodyNearby_;  // parallel to stepBodies' bodies
-  std::vector<std::uint64_t> cellKeys_;
-  std::vector<std::uint32_t> order_;
   std::unique_ptr<detail::StepWorkspace> workspace_;
 };
 
@@ -171,15 +254,44 @@ class StepScratch {
 void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepScratch& scratch,
               StepReport* report = nullptr);
 
-/// Advances every body by `dt`: each against the level (as stepBody, in
-/// order), then overlapping bodies are pushed apart, each by half the
-/// overlap (measured along the line between centres) horizontally away from
-/// the other; a push is a move against the level, so it never ends inside a
-/// wall. Pushes are horizontal so that a crowd never lifts a body (onto a
-/// wall's top, say): bodies do not stand on each other's heads. The broad
-/// phase is a uniform grid: cost about linear in the number of bodies.
+/// The level phase of stepBodies: advances each of `bodies` by `dt` against
+/// the level only, as stepBody, without the body-against-body phase.
+/// `forces` is parallel to `bodies`; `reports` is empty or parallel too (each
+/// report is reset, then filled). To spread a frame over a job system, call
+/// it on disjoint sub-spans of the bodies (with the matching sub-spans of
+/// forces and reports), then build a BodyGrid from all the bodies, then call
+/// pushBodiesApart on disjoint ranges: the same trajectories as stepBodies,
+/// bit for bit, whatever the split.
+/// Thread safety: as stepBody; calls on disjoint bodies may run concurrently,
+/// each with its own scratch.
+void stepBodiesAgainstLevel(const World& world, std::span<Body> bodies,
+                            std::span<const Vec3> forces, float dt, StepScratch& scratch,
+                            std::span<StepReport> reports = {});
+
+/// Advances every body by `dt`: each against the level (stepBodiesAgainstLevel),
+/// then overlapping bodies are pushed apart (scratch.bodyGrid, then
+/// pushBodiesApart: each body by half of each overlap, horizontally, in one
+/// move against the level, so it never ends inside a wall). The broad phase
+/// is a hashed grid and the pushers per body are capped (kMaxBodyPushes,
+/// kMaxBodyCandidates): the cost is linear in the number of bodies, even
+/// when they pile up at one point.
 /// `forces` is parallel to `bodies`; `reports` is empty or parallel too.
+/// Thread safety: the World is only read; runs on the calling thread.
 void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3> forces, float dt,
                 StepScratch& scratch, std::span<StepReport> reports = {});
+
+class ThreadPool;
+
+/// stepBodies on every thread of `pool`: both phases are split into ranges of
+/// bodies run in parallel. Gives the same trajectories and reports as the
+/// single-threaded stepBodies, bit for bit, for any number of threads.
+/// `scratches` holds one scratch per pool thread (scratches[t] for thread t;
+/// scratches[0] also holds the frame's body grid); keep them across frames.
+/// Preconditions: as stepBodies, and scratches.size() >= pool.threadCount().
+/// Thread safety: uses the pool (one call at a time per pool) and the
+/// scratches; the World is only read.
+void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3> forces, float dt,
+                ThreadPool& pool, std::span<StepScratch> scratches,
+                std::span<StepReport> reports = {});
 
 }  // namespace bspf

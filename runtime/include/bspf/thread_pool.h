@@ -1,0 +1,62 @@
+// bspf/thread_pool.h: a small pool of worker threads for stepping many bodies
+// (the stepBodies overload in movement.h takes one). Games with a job system
+// of their own can ignore it and drive the phases of movement.h themselves.
+#pragma once
+
+#include <condition_variable>
+#include <cstddef>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace bspf {
+
+/// A fixed set of threads, created once and reused: a frame's work costs two
+/// wake-ups, never a thread creation. The calling thread takes part in the
+/// work, so a pool of N threads starts N - 1 workers (none for N = 1).
+class ThreadPool {
+ public:
+  /// A work item: `thread` is the index, 0 to threadCount() - 1, of the
+  /// thread running it (0 is the caller of parallelFor), for per-thread
+  /// scratch; [first, last) is the range of items to process.
+  using RangeTask = std::function<void(int thread, std::size_t first, std::size_t last)>;
+
+  /// Starts `threads - 1` workers. Precondition: threads >= 1.
+  explicit ThreadPool(int threads);
+  /// Stops and joins the workers. Precondition: no parallelFor running.
+  ~ThreadPool();
+  ThreadPool(const ThreadPool&) = delete;
+  ThreadPool& operator=(const ThreadPool&) = delete;
+
+  /// The threads that run a parallelFor, the caller included: >= 1.
+  int threadCount() const { return int(workers_.size()) + 1; }
+
+  /// Calls `task` on consecutive ranges of at most `chunk` items covering
+  /// [0, count) exactly once, on all the pool's threads, and returns when
+  /// every range is done. Threads take ranges in order as they become free,
+  /// so which thread runs which range varies from call to call: results must
+  /// not depend on it. `task` must not throw (std::terminate otherwise) and
+  /// must not call parallelFor on the same pool. Precondition: chunk >= 1.
+  /// Thread safety: one parallelFor at a time per pool; call it from one
+  /// thread (or serialise the callers).
+  void parallelFor(std::size_t count, std::size_t chunk, const RangeTask& task);
+
+ private:
+  void workerLoop(int thread);
+  void runRanges(int thread);
+
+  std::vector<std::thread> workers_;
+  std::mutex mutex_;
+  std::condition_variable wake_, done_;
+  // The current job, guarded by mutex_ (generation_ tells workers a new one
+  // started); nextRange_ is handed out under the mutex as well: ranges are
+  // coarse, so the lock is cheap next to the work in each.
+  const RangeTask* task_ = nullptr;
+  std::size_t count_ = 0, chunk_ = 1, nextRange_ = 0;
+  unsigned long long generation_ = 0;
+  int busy_ = 0;  ///< workers still inside the current job
+  bool stopping_ = false;
+};
+
+}  // namespace bspf

@@ -1,0 +1,207 @@
+// The body-against-body phase (runtime/src/body_phase.cpp) and stepping many
+// bodies on several threads (stepBodies with a ThreadPool, and the phases a
+// game's job system drives itself).
+#include <bspf/movement.h>
+#include <bspf/thread_pool.h>
+
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "support/test_support.h"
+
+using bspf::Body;
+using bspf::Vec3;
+
+namespace {
+
+constexpr float kDt = 1.0f / 60.0f;
+
+// A 40 m floor with a 10 m walled yard on it and a pillar in the yard.
+bspc::Mesh yard() {
+  bspc::Mesh mesh = bspf::test::boxMesh({-20, -1, -20}, {20, 0, 20});
+  bspf::test::append(mesh, bspf::test::boxMesh({-6, 0, -6}, {6, 2, -5}));
+  bspf::test::append(mesh, bspf::test::boxMesh({-6, 0, 5}, {6, 2, 6}));
+  bspf::test::append(mesh, bspf::test::boxMesh({-6, 0, -5}, {-5, 2, 5}));
+  bspf::test::append(mesh, bspf::test::boxMesh({5, 0, -5}, {6, 2, 5}));
+  bspf::test::append(mesh, bspf::test::boxMesh({0.5, 0, 0.5}, {1.5, 2, 1.5}));
+  return mesh;
+}
+
+// 300 bodies of three sizes packed in the yard, some in the air, some sharing
+// a point, each walking its own way.
+struct Crowd {
+  std::vector<Body> bodies;
+  std::vector<Vec3> forces;
+};
+Crowd packedCrowd(bspf::CollisionMethod method) {
+  Crowd crowd;
+  for (int i = 0; i < 300; ++i) {
+    Body b;
+    const int k = i % 100;
+    b.position = Vec3(-4.2f + 0.85f * float(k % 10), 0.9f + 0.4f * float(i / 100),
+                      -4.2f + 0.85f * float(k / 10));
+    b.radii = i % 3 == 0 ? bspf::EllipsoidRadii{0.3f, 0.5f} : bspf::EllipsoidRadii{0.45f, 0.85f};
+    if (i % 7 == 0) b.radii = {0.6f, 1.0f};
+    b.settings.method = method;
+    crowd.bodies.push_back(b);
+    const float angle = 2.399963f * float(i);
+    crowd.forces.emplace_back(std::cos(angle) * 60, 0, std::sin(angle) * 60);
+  }
+  return crowd;
+}
+
+bool sameBits(const Vec3& a, const Vec3& b) { return (a.array() == b.array()).all(); }
+
+void requireSameFrame(std::span<const Body> expected, std::span<const Body> actual,
+                      std::span<const bspf::StepReport> expectedReports,
+                      std::span<const bspf::StepReport> actualReports) {
+  REQUIRE(expected.size() == actual.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    INFO("body " << i);
+    REQUIRE(sameBits(expected[i].position, actual[i].position));
+    REQUIRE(sameBits(expected[i].velocity, actual[i].velocity));
+    REQUIRE(expected[i].grounded == actual[i].grounded);
+    REQUIRE(expectedReports[i].bodyContacts == actualReports[i].bodyContacts);
+    REQUIRE(expectedReports[i].contactCount == actualReports[i].contactCount);
+    REQUIRE(expectedReports[i].iterations == actualReports[i].iterations);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("stepping a crowd on 1, 2, 3 or 4 threads gives bit-identical trajectories",
+          "[runtime][threads]") {
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO((method == bspf::CollisionMethod::Planes ? "planes" : "exact"));
+  const bspf::test::CompiledMesh level(yard());
+  Crowd reference = packedCrowd(method);
+  std::vector<bspf::StepReport> referenceReports(reference.bodies.size());
+  bspf::StepScratch scratch;
+  std::vector<Crowd> threaded;
+  std::vector<std::unique_ptr<bspf::ThreadPool>> pools;
+  std::vector<std::vector<bspf::StepScratch>> scratches;
+  std::vector<std::vector<bspf::StepReport>> reports;
+  for (int threads = 1; threads <= 4; ++threads) {
+    threaded.push_back(packedCrowd(method));
+    pools.push_back(std::make_unique<bspf::ThreadPool>(threads));
+    scratches.emplace_back(threads);
+    reports.emplace_back(reference.bodies.size());
+  }
+  int contacts = 0;
+  for (int frame = 0; frame < 40; ++frame) {
+    bspf::stepBodies(level.world, reference.bodies, reference.forces, kDt, scratch,
+                     referenceReports);
+    for (const auto& r : referenceReports) contacts += r.bodyContacts;
+    for (std::size_t t = 0; t < threaded.size(); ++t) {
+      INFO("frame " << frame << ", " << t + 1 << " threads");
+      bspf::stepBodies(level.world, threaded[t].bodies, threaded[t].forces, kDt, *pools[t],
+                       scratches[t], reports[t]);
+      requireSameFrame(reference.bodies, threaded[t].bodies, referenceReports, reports[t]);
+    }
+  }
+  REQUIRE(contacts > 300);  // the crowd is dense: the body phase did work
+}
+
+TEST_CASE("a game's own split of the two phases gives the same frame as stepBodies",
+          "[runtime][threads]") {
+  const bspf::test::CompiledMesh level(yard());
+  Crowd reference = packedCrowd(bspf::CollisionMethod::Planes);
+  Crowd split = reference;
+  const std::size_t n = reference.bodies.size();
+  std::vector<bspf::StepReport> referenceReports(n), splitReports(n);
+  bspf::StepScratch scratch, other;
+  bspf::BodyGrid grid;
+  // Uneven ranges, run last first, as jobs may finish in any order.
+  const std::vector<std::size_t> cuts{0, 7, 100, 101, 230, n};
+  for (int frame = 0; frame < 20; ++frame) {
+    bspf::stepBodies(level.world, reference.bodies, reference.forces, kDt, scratch,
+                     referenceReports);
+    for (std::size_t c = cuts.size() - 1; c > 0; --c) {
+      const std::size_t first = cuts[c - 1], count = cuts[c] - first;
+      bspf::stepBodiesAgainstLevel(level.world, std::span(split.bodies).subspan(first, count),
+                                   std::span(split.forces).subspan(first, count), kDt, other,
+                                   std::span(splitReports).subspan(first, count));
+    }
+    grid.build(split.bodies);
+    REQUIRE(grid.size() == n);
+    for (std::size_t c = cuts.size() - 1; c > 0; --c)
+      bspf::pushBodiesApart(level.world, grid, split.bodies, cuts[c - 1], cuts[c], other,
+                            splitReports);
+    INFO("frame " << frame);
+    requireSameFrame(reference.bodies, split.bodies, referenceReports, splitReports);
+  }
+}
+
+TEST_CASE("a small and a big overlapping body are pushed apart by equal halves",
+          "[runtime][movement]") {
+  const bspf::test::CompiledMesh level(bspf::test::boxMesh({-20, -1, -20}, {20, 0, 20}));
+  // Listed either way round: the grid's cells come from the biggest body, so
+  // the pair is found whichever cell each centre falls in.
+  const bool smallFirst = GENERATE(true, false);
+  INFO((smallFirst ? "small body first" : "big body first"));
+  Body small, big;
+  small.radii = {0.25f, 0.5f};
+  big.radii = {1.2f, 1.6f};
+  small.position = Vec3(0.3f, 0.5f, 0.2f);
+  big.position = Vec3(1.5f, 1.6f, 0.2f);  // 1.2 m apart, 1.45 m of radii
+  std::vector<Body> bodies = smallFirst ? std::vector{small, big} : std::vector{big, small};
+  const std::size_t s = smallFirst ? 0 : 1, b = 1 - s;
+  const std::vector<Vec3> forces(2, Vec3::Zero());
+  std::vector<bspf::StepReport> reports(2);
+  bspf::StepScratch scratch;
+  const Vec3 smallStart = bodies[s].position, bigStart = bodies[b].position;
+  bspf::stepBodies(level.world, bodies, forces, kDt, scratch, reports);
+  REQUIRE(reports[s].bodyContacts == 1);
+  REQUIRE(reports[b].bodyContacts == 1);
+  const Vec3 smallMove = bodies[s].position - smallStart, bigMove = bodies[b].position - bigStart;
+  // Horizontal, opposite, equal: the small body is not shoved the whole way.
+  REQUIRE(smallMove.x() < -0.05f);
+  REQUIRE(bigMove.x() > 0.05f);
+  REQUIRE(smallMove.x() == Approx(-bigMove.x()).margin(1e-5));
+  REQUIRE(std::abs(smallMove.z()) < 1e-6f);
+  for (int frame = 0; frame < 30; ++frame)
+    bspf::stepBodies(level.world, bodies, forces, kDt, scratch, reports);
+  const Vec3 apart = bodies[s].position - bodies[b].position;
+  const Vec3 direction = apart.normalized();
+  const float touching = bspf::effectiveRadius(direction, bodies[s].radii) +
+                         bspf::effectiveRadius(direction, bodies[b].radii);
+  REQUIRE(apart.norm() >= touching - 1e-3f);
+  REQUIRE(bodies[s].position.y() == Approx(0.5f).margin(3e-3));
+  REQUIRE(bodies[b].position.y() == Approx(1.6f).margin(3e-3));
+}
+
+TEST_CASE(
+    "bodies piled at one point are each pushed by at most kMaxBodyPushes and spread out "
+    "in every direction",
+    "[runtime][movement]") {
+  const bspf::test::CompiledMesh level(bspf::test::boxMesh({-50, -1, -50}, {50, 0, 50}));
+  const Vec3 point(3, 0.86f, -2);
+  std::vector<Body> bodies(2000);
+  for (Body& b : bodies) b.position = point;
+  const std::vector<Vec3> forces(bodies.size(), Vec3::Zero());
+  std::vector<bspf::StepReport> reports(bodies.size());
+  bspf::StepScratch scratch;
+  int mostPushers = 0;
+  for (int frame = 0; frame < 60; ++frame) {
+    bspf::stepBodies(level.world, bodies, forces, kDt, scratch, reports);
+    for (const auto& r : reports) mostPushers = std::max(mostPushers, r.bodyContacts);
+  }
+  REQUIRE(mostPushers == bspf::kMaxBodyPushes);
+  // Spread over the floor around the point, in all four quadrants, none
+  // still at the point, none sunk into the floor.
+  int quadrants[4] = {0, 0, 0, 0};
+  float farthest = 0;
+  for (const Body& b : bodies) {
+    const Vec3 d = b.position - point;
+    REQUIRE(std::hypot(d.x(), d.z()) > 1e-3f);
+    REQUIRE(b.position.y() > 0.85f - 2e-3f);
+    ++quadrants[(d.x() > 0) + 2 * (d.z() > 0)];
+    farthest = std::max(farthest, std::hypot(d.x(), d.z()));
+  }
+  for (const int q : quadrants) REQUIRE(q > 200);
+  REQUIRE(farthest > 2);
+}

@@ -1,0 +1,49 @@
+#include <bspf/thread_pool.h>
+
+#include <atomic>
+#include <catch2/catch.hpp>
+#include <memory>
+#include <thread>
+#include <vector>
+
+TEST_CASE("a thread pool's parallelFor covers every item exactly once, call after call",
+          "[runtime][threads]") {
+  const int threads = GENERATE(1, 2, 3, 4);
+  INFO(threads << " threads");
+  bspf::ThreadPool pool(threads);
+  REQUIRE(pool.threadCount() == threads);
+  for (int call = 0; call < 50; ++call) {
+    const std::size_t count = std::size_t(call * 37 % 301);
+    const std::size_t chunk = std::size_t(1 + call % 7);
+    INFO("call " << call << ": " << count << " items in ranges of " << chunk);
+    const auto visits = std::make_unique<std::atomic<int>[]>(count + 1);
+    std::atomic<bool> rangesFit = true, threadsInRange = true;
+    pool.parallelFor(count, chunk, [&](int thread, std::size_t first, std::size_t last) {
+      if (thread < 0 || thread >= threads) threadsInRange = false;
+      if (first >= last || last > count || last - first > chunk) rangesFit = false;
+      for (std::size_t i = first; i < last; ++i) ++visits[i];
+    });
+    REQUIRE(rangesFit);
+    REQUIRE(threadsInRange);
+    for (std::size_t i = 0; i < count; ++i) REQUIRE(visits[i] == 1);
+  }
+}
+
+TEST_CASE("a thread pool runs ranges on several threads at once", "[runtime][threads]") {
+  // Every range waits until two threads are inside at the same time: with
+  // one thread the pool would never return, so this fails by hanging rather
+  // than by luck. The wait is bounded to keep a broken pool from blocking
+  // the suite forever.
+  bspf::ThreadPool pool(2);
+  std::atomic<int> inside = 0, mostInside = 0;
+  pool.parallelFor(2, 1, [&](int, std::size_t, std::size_t) {
+    const int now = ++inside;
+    int seen = mostInside.load();
+    while (now > seen && !mostInside.compare_exchange_weak(seen, now)) {
+    }
+    for (long spins = 0; mostInside.load() < 2 && spins < 2'000'000'000L; ++spins)
+      std::this_thread::yield();
+    --inside;
+  });
+  REQUIRE(mostInside == 2);
+}
