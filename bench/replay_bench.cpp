@@ -8,11 +8,11 @@
 // For each method, the walkers crowd (samples/walkers_sim.h: from the spawns,
 // or placed on walkable floor without them) runs once, recording every body's
 // state and input force just before each frame's stepBodies. Those steps are
-// then replayed with stepBody alone (no body-against-body pushes), from copies
-// of the recorded states with one StepScratch, each agent's own nearby
-// triangles swapped in for its steps, as stepBodies does:
-//   - timed: every recorded step in order, --repeats times; the median of the
-//     repeats' ns per step;
+// then replayed against the level alone (no body-against-body pushes), from
+// copies of the recorded states:
+//   - timed: every recorded frame in order with stepBodiesAgainstLevel (each
+//     agent keeps its caches from frame to frame, as in stepBodies),
+//     --repeats times; the median of the repeats' ns per step;
 //   - measured, untimed, in one more replay: tree queries per step
 //     (NearbyTriangles::queries: most steps reuse the agent's last query), the
 //     candidates the narrow phase tested in the step's last slide
@@ -82,7 +82,7 @@ double median(std::vector<double> values) {
 }
 
 // Replays recorded step `i` with stepBody, the agent's own nearby triangles
-// swapped into the scratch as stepBodies does.
+// swapped into the scratch (what a step derived from them is made again).
 void replayStep(const World& world, const Recording& recording, std::size_t i, float dt, Body& body,
                 bspf::StepScratch& scratch, std::vector<bspf::NearbyTriangles>& agentNearby) {
   bspf::NearbyTriangles& own = agentNearby[i % recording.agents];
@@ -91,17 +91,23 @@ void replayStep(const World& world, const Recording& recording, std::size_t i, f
   std::swap(scratch.nearby, own);
 }
 
-// The median over `repeats` replays of every recorded step, ns per step.
+// The median over `repeats` replays of every recorded frame's level phase
+// (stepBodiesAgainstLevel on the frame's recorded bodies, which keeps each
+// agent's caches by index, as stepBodies does), ns per step.
 double timeReplay(const World& world, const Recording& recording, float dt, int repeats) {
+  const std::size_t agents = recording.agents;
   std::vector<Body> bodies(recording.steps.size());
-  bspf::StepScratch scratch;
+  std::vector<Vec3> forces(recording.steps.size());
+  for (std::size_t i = 0; i < bodies.size(); ++i) forces[i] = recording.steps[i].force;
   std::vector<double> nsPerStep;
   for (int repeat = 0; repeat < repeats; ++repeat) {
     for (std::size_t i = 0; i < bodies.size(); ++i) bodies[i] = recording.steps[i].body;
-    std::vector<bspf::NearbyTriangles> agentNearby(recording.agents);
+    bspf::StepScratch scratch;
     const auto start = std::chrono::steady_clock::now();
-    for (std::size_t i = 0; i < bodies.size(); ++i)
-      replayStep(world, recording, i, dt, bodies[i], scratch, agentNearby);
+    for (std::size_t first = 0; first < bodies.size(); first += agents)
+      bspf::stepBodiesAgainstLevel(world, std::span(bodies).subspan(first, agents),
+                                   std::span<const Vec3>(forces).subspan(first, agents), dt,
+                                   scratch);
     const auto stop = std::chrono::steady_clock::now();
     nsPerStep.push_back(std::chrono::duration<double, std::nano>(stop - start).count() /
                         double(bodies.size()));

@@ -150,7 +150,8 @@ void recoverFromPenetration(const World& world, Vec3& p, const Vec3& toSphere, f
     const Vec3 centre = p.cwiseQuotient(toSphere);
     const Bounds here = sweptBounds(centre, centre, radii);
     bool pushed = false;
-    for (const detail::ExactCandidate& candidate : local.around(world, here, moveLength, scratch)) {
+    for (const std::uint32_t index : local.around(world, here, moveLength, radii, scratch)) {
+      const detail::ExactCandidate& candidate = local[index];
       if (!boxesOverlap(candidate.low, candidate.high, here.low, here.high)) continue;
       const Triangle& tri = candidate.sphere;
       if (tri.normal.dot(p - tri.a) < 0) continue;
@@ -182,7 +183,8 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
   int planeCount = 0;
   bool recovered = false;
   const float moveLength = (desiredEnd - start).norm();
-  LocalCandidates local(scratch.workspace().exact, [&](const CandidateTriangle& c) {
+  detail::StepWorkspace& workspace = scratch.workspace();
+  LocalCandidates local(workspace.exact, workspace.listed, [&](const CandidateTriangle& c) {
     return detail::makeExactCandidate(world, c, radii, toSphere);
   });
   for (int iteration = 0;; ++iteration) {
@@ -192,8 +194,8 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     const Bounds swept = sweptBounds(from, to, radii);
     Impact impact;
     bool penetrating = false;
-    for (const detail::ExactCandidate& candidate :
-         local.around(world, swept, moveLength, scratch)) {
+    for (const std::uint32_t index : local.around(world, swept, moveLength, radii, scratch)) {
+      const detail::ExactCandidate& candidate = local[index];
       if (!boxesOverlap(candidate.low, candidate.high, swept.low, swept.high)) continue;
       // The side-value pre-check on the stored face plane: a path that stays
       // more than the body's extent in front of the plane, or starts behind

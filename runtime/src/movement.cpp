@@ -156,7 +156,7 @@ void stepBodiesAgainstLevel(const World& world, std::span<Body> bodies,
                             std::span<StepReport> reports) {
   assert(forces.size() == bodies.size());
   assert(reports.empty() || reports.size() == bodies.size());
-  std::vector<NearbyTriangles>& caches = scratch.workspace().bodyNearby;
+  std::vector<detail::BodyCache>& caches = scratch.workspace().bodies;
   if (caches.size() < bodies.size()) caches.resize(bodies.size());
   detail::stepRangeAgainstLevel(world, bodies, forces, dt, scratch, reports, caches);
 }
@@ -165,16 +165,22 @@ namespace detail {
 
 void stepRangeAgainstLevel(const World& world, std::span<Body> bodies, std::span<const Vec3> forces,
                            float dt, StepScratch& scratch, std::span<StepReport> reports,
-                           std::span<NearbyTriangles> caches) {
+                           std::span<BodyCache> caches) {
   // Each body keeps its own nearby triangles from frame to frame (swapped in,
   // no copy). A list reordered by the caller only costs re-queries: a cache
   // answers only boxes inside the one it queried, whoever asks, and the
   // narrow phases test their candidates in triangle order, so results never
   // depend on what a cache held.
+  StepWorkspace& workspace = scratch.workspace();
+  auto swapIn = [&](BodyCache& cache) {
+    std::swap(scratch.nearby, cache.nearby);
+    std::swap(workspace.planes, cache.planes);
+    std::swap(workspace.exact, cache.exact);
+  };
   for (std::size_t i = 0; i < bodies.size(); ++i) {
-    std::swap(scratch.nearby, caches[i]);
+    swapIn(caches[i]);
     stepBody(world, bodies[i], forces[i], dt, scratch, reports.empty() ? nullptr : &reports[i]);
-    std::swap(scratch.nearby, caches[i]);
+    swapIn(caches[i]);  // and out again
   }
 }
 
@@ -198,7 +204,7 @@ void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3
   constexpr std::size_t kBodiesPerRange = 16;
   // The bodies' caches live in the first scratch, by body index, whichever
   // thread steps a body (each entry is touched by one thread at a time).
-  std::vector<NearbyTriangles>& caches = scratches[0].workspace().bodyNearby;
+  std::vector<detail::BodyCache>& caches = scratches[0].workspace().bodies;
   if (caches.size() < bodies.size()) caches.resize(bodies.size());
   pool.parallelFor(
       bodies.size(), kBodiesPerRange, [&](int thread, std::size_t first, std::size_t last) {

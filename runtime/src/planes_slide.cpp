@@ -20,13 +20,14 @@ struct Hit {
 // The triangle in the way of the move start -> end with the lowest facing
 // value, if any.
 std::optional<Hit> findBlockingTriangle(const World& world, const Vec3& start, const Vec3& end,
-                                        EllipsoidRadii radii, const Bounds& swept,
-                                        std::span<detail::PlanesCandidate> candidates) {
+                                        EllipsoidRadii radii, const Bounds& swept, auto& local,
+                                        std::span<const std::uint32_t> listed) {
   const Vec3 move = end - start;
   const float moveLength = move.norm();
   const Vec3 direction = moveLength > 0 ? Vec3(move / moveLength) : Vec3::Zero();
   std::optional<Hit> best;
-  for (detail::PlanesCandidate& candidate : candidates) {
+  for (const std::uint32_t index : listed) {
+    detail::PlanesCandidate& candidate = local[index];
     // The cheapest test first: the box, then the pre-check's two dot
     // products, and only then the six planes.
     if (!boxesOverlap(candidate.low, candidate.high, swept.low, swept.high)) continue;
@@ -141,13 +142,15 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
   // plus the body's size.
   const float maxShift = (desiredEnd - start).norm() + std::max(radii.xz, radii.y);
   const float moveLength = (desiredEnd - start).norm();
-  LocalCandidates local(scratch.workspace().planes, [&](const CandidateTriangle& c) {
+  detail::StepWorkspace& workspace = scratch.workspace();
+  LocalCandidates local(workspace.planes, workspace.listed, [&](const CandidateTriangle& c) {
     return detail::makePlanesCandidate(world, c, radii);
   });
   for (int iteration = 0;; ++iteration) {
     const Bounds swept = sweptBounds(start, result.end, radii);
-    const std::optional<Hit> hit = findBlockingTriangle(
-        world, start, result.end, radii, swept, local.around(world, swept, moveLength, scratch));
+    const std::optional<Hit> hit =
+        findBlockingTriangle(world, start, result.end, radii, swept, local,
+                             local.around(world, swept, moveLength, radii, scratch));
     if (!hit) return result;
     if (iteration == settings.maxIterations) {
       result.refused = true;

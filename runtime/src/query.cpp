@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cassert>
 #include <cmath>
 
@@ -176,6 +177,8 @@ void NearbyTriangles::cover(const World& world, const Vec3& low, const Vec3& hig
   low_ = low - Vec3::Constant(pad);
   high_ = high + Vec3::Constant(pad);
   ++queries_;
+  static std::atomic<std::uint64_t> lastQueryId{0};
+  queryId_ = ++lastQueryId;
   collectBoxCandidates(world, low_, high_, scratch, list_);
 }
 

@@ -47,42 +47,57 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
 inline float nearbyPad(float moveLength) { return 2.0f * moveLength + 0.1f; }
 
 /// The triangles one slide's iterations test: the body's nearby triangles
-/// (StepScratch::nearby) whose box overlaps a local box around the slide,
-/// each made into a `Candidate` (its tests precomputed for the body) in
-/// `list`, a short array every iteration scans. Made again only when an
-/// iteration's swept box leaves the local box (a slide moves the end by
+/// (StepScratch::nearby), made into `Candidate`s for its radii once per tree
+/// query (kept with the body between frames, their tests precomputed), of
+/// which those whose box overlaps a local box around the slide are listed,
+/// by index, in a short list every iteration scans. Listed again only when
+/// an iteration's swept box leaves the local box (a slide moves the end by
 /// about the move's length at most).
 template <typename Candidate, typename Make>
 class LocalCandidates {
  public:
-  LocalCandidates(std::vector<Candidate>& list, Make make) : list_(list), make_(make) {}
+  LocalCandidates(detail::MadeCandidates<Candidate>& made, std::vector<std::uint32_t>& listed,
+                  Make make)
+      : made_(made), listed_(listed), make_(make) {}
 
-  /// Candidates whose box may overlap `swept` (filter by it: the list holds
-  /// more). `moveLength`, metres, sizes the local box and the tree query.
-  std::span<Candidate> around(const World& world, const Bounds& swept, float moveLength,
-                              StepScratch& scratch) {
-    if (!valid_ || !(swept.low.array() >= local_.low.array()).all() ||
-        !(swept.high.array() <= local_.high.array()).all()) {
-      valid_ = true;
-      const Vec3 grow = Vec3::Constant(0.25f * moveLength + kLocalGrowMetres);
-      local_ = {swept.low - grow, swept.high + grow};
-      scratch.nearby.cover(world, local_.low, local_.high, nearbyPad(moveLength), scratch.sweep);
-      list_.clear();
-      for (const CandidateTriangle& c : scratch.nearby.list())
-        if (boxesOverlap(c.low, c.high, local_.low, local_.high)) list_.push_back(make_(c));
+  /// Indices (for operator[]) of candidates whose box may overlap `swept`,
+  /// in triangle order (filter by `swept`: the list holds more).
+  /// `moveLength`, metres, sizes the local box and the tree query.
+  std::span<const std::uint32_t> around(const World& world, const Bounds& swept, float moveLength,
+                                        EllipsoidRadii radii, StepScratch& scratch) {
+    if (valid_ && (swept.low.array() >= local_.low.array()).all() &&
+        (swept.high.array() <= local_.high.array()).all())
+      return listed_;
+    valid_ = true;
+    const Vec3 grow = Vec3::Constant(0.25f * moveLength + kLocalGrowMetres);
+    local_ = {swept.low - grow, swept.high + grow};
+    scratch.nearby.cover(world, local_.low, local_.high, nearbyPad(moveLength), scratch.sweep);
+    if (made_.query != scratch.nearby.queryId() || made_.radii.xz != radii.xz ||
+        made_.radii.y != radii.y) {
+      made_.list.clear();
+      for (const CandidateTriangle& c : scratch.nearby.list()) made_.list.push_back(make_(c));
       // In triangle order, whatever order the query listed them in (which
       // depends on the box it was made for): ties in the narrow phases then
       // resolve the same with a fresh query as with a body's older one.
-      std::sort(list_.begin(), list_.end(),
+      std::sort(made_.list.begin(), made_.list.end(),
                 [](const Candidate& a, const Candidate& b) { return a.triangle < b.triangle; });
-      scratch.workspace().lastCount = list_.size();
+      made_.query = scratch.nearby.queryId();
+      made_.radii = radii;
     }
-    return list_;
+    listed_.clear();
+    for (std::uint32_t i = 0; i < made_.list.size(); ++i)
+      if (boxesOverlap(made_.list[i].low, made_.list[i].high, local_.low, local_.high))
+        listed_.push_back(i);
+    scratch.workspace().lastCount = listed_.size();
+    return listed_;
   }
+
+  Candidate& operator[](std::uint32_t index) { return made_.list[index]; }
 
  private:
   static constexpr float kLocalGrowMetres = 0.02f;
-  std::vector<Candidate>& list_;
+  detail::MadeCandidates<Candidate>& made_;
+  std::vector<std::uint32_t>& listed_;
   Make make_;
   Bounds local_;
   bool valid_ = false;

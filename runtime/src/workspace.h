@@ -55,22 +55,42 @@ struct ExactCandidate {
   Triangle sphere;
 };
 
-struct StepWorkspace {
-  std::vector<PlanesCandidate> planes;
-  std::vector<ExactCandidate> exact;
-  std::size_t lastCount = 0;
-  /// Each body's nearby triangles, by index in the bodies stepBodies (or
-  /// stepBodiesAgainstLevel) steps: swapped into StepScratch::nearby for the
-  /// body's step, so each body reuses its own query over frames.
-  std::vector<NearbyTriangles> bodyNearby;
+/// A body's nearby triangles made into one narrow phase's candidates.
+template <typename Candidate>
+struct MadeCandidates {
+  std::vector<Candidate> list;  ///< in triangle order
+  /// NearbyTriangles::queryId() of the query they were made from; 0: none.
+  std::uint64_t query = 0;
+  EllipsoidRadii radii{0, 0};  ///< they were made for
 };
 
-/// Steps bodies[i] against the level with caches[i] as its nearby
-/// triangles (see stepBodiesAgainstLevel). Precondition: caches is at least
+/// What one body keeps from frame to frame: its tree query and the
+/// candidates made from it.
+struct BodyCache {
+  NearbyTriangles nearby;
+  MadeCandidates<PlanesCandidate> planes;
+  MadeCandidates<ExactCandidate> exact;
+};
+
+struct StepWorkspace {
+  /// The candidates of the body being stepped, made from StepScratch::nearby.
+  MadeCandidates<PlanesCandidate> planes;
+  MadeCandidates<ExactCandidate> exact;
+  /// The current slide's candidates, as indices into planes or exact.
+  std::vector<std::uint32_t> listed;
+  std::size_t lastCount = 0;
+  /// Each body's cache, by index in the bodies stepBodies (or
+  /// stepBodiesAgainstLevel) steps: swapped in for the body's step, so each
+  /// body reuses its own query and candidates over frames.
+  std::vector<BodyCache> bodies;
+};
+
+/// Steps bodies[i] against the level with caches[i] as its cache (see
+/// stepBodiesAgainstLevel). Precondition: caches is at least
 /// as long as bodies.
 void stepRangeAgainstLevel(const World& world, std::span<Body> bodies, std::span<const Vec3> forces,
                            float dt, StepScratch& scratch, std::span<StepReport> reports,
-                           std::span<NearbyTriangles> caches);
+                           std::span<BodyCache> caches);
 
 PlanesCandidate makePlanesCandidate(const World& world, const CandidateTriangle& c,
                                     EllipsoidRadii radii);

@@ -100,12 +100,16 @@ class NearbyTriangles {
   std::span<const CandidateTriangle> list() const { return list_; }
   /// How many tree queries cover() made since construction (diagnostics).
   std::uint64_t queries() const { return queries_; }
+  /// A number naming the last query, unique within the process (0 before
+  /// the first), so what was derived from list() can tell it is stale.
+  std::uint64_t queryId() const { return queryId_; }
 
  private:
   std::uint64_t worldId_ = 0;
   Vec3 low_ = Vec3::Zero(), high_ = Vec3::Zero();
   std::vector<CandidateTriangle> list_;
   std::uint64_t queries_ = 0;
+  std::uint64_t queryId_ = 0;
 };
 
 /// An axis-aligned box, metres.
