@@ -135,7 +135,7 @@ void gatherInputs(Level& level) {
       const bspf::schema::TrianglePlanes& planes = world.trianglePlanes()[t];
       bspf::detail::PlanesCandidate grown =
           bspf::detail::makePlanesCandidate(world, {t, Vec3::Zero(), Vec3::Zero()}, kRadii);
-      bspf::detail::growPlanes(world, kRadii, grown);
+      bspf::detail::growPlanes(world, t, kRadii, grown.grown);
       level.preChecks.push_back({&planes.face(), m.from, m.to});
       // The points findBlockingTriangle tests.
       const bspf::detail::SideValues sides =
@@ -221,7 +221,7 @@ void preCheck(benchmark::State& state, const Level& level) {
 
 void insideGrownTriangle(benchmark::State& state, const Level& level) {
   cycle(state, level.points, [](const PointInput& x) {
-    bool inside = x.candidate.insideGrown(x.point);
+    bool inside = x.candidate.grown.inside(x.point);
     benchmark::DoNotOptimize(inside);
   });
 }

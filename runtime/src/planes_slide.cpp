@@ -35,7 +35,8 @@ std::optional<Hit> findBlockingTriangle(const World& world, const Vec3& start, c
     const float startSide = face.normal.dot(start) - face.distance;
     const float endSide = face.normal.dot(end) - face.distance;
     if (!detail::passesPreCheck({face.reach, startSide, endSide})) continue;
-    if (!candidate.grownReady) detail::growPlanes(world, radii, candidate);
+    if (!candidate.grown.ready)
+      detail::growPlanes(world, candidate.triangle, radii, candidate.grown);
     // Test the six planes where the centre crosses the offset plane (the
     // article leaves this position unspecified: testing the end lets fast
     // bodies skip small triangles). A body already within it is tested at
@@ -43,9 +44,9 @@ std::optional<Hit> findBlockingTriangle(const World& world, const Vec3& start, c
     bool inside;
     if (startSide >= face.reach) {
       const float f = (startSide - face.reach) / (startSide - endSide);
-      inside = candidate.insideGrown(start + f * move);
+      inside = candidate.grown.inside(start + f * move);
     } else {
-      inside = candidate.insideGrown(start) || candidate.insideGrown(end);
+      inside = candidate.grown.inside(start) || candidate.grown.inside(end);
     }
     if (!inside) continue;
     const float facing = face.normal.dot(direction);
@@ -114,19 +115,21 @@ PlanesCandidate makePlanesCandidate(const World& world, const CandidateTriangle&
   return out;
 }
 
-void growPlanes(const World& world, EllipsoidRadii radii, PlanesCandidate& c) {
-  const schema::TrianglePlanes& planes = world.trianglePlanes()[c.triangle];
+void growPlanes(const World& world, std::uint32_t triangle, EllipsoidRadii radii,
+                GrownTriangle& grown) {
+  const schema::TrianglePlanes& planes = world.trianglePlanes()[triangle];
   // Each perpendicular plane pushed out by the body's extent along its own
   // normal (a local offset; the stored plane is never modified, the
   // article's second defect).
+  auto grow = [&](const schema::Plane& plane, Eigen::Vector4f& out) {
+    const schema::Vec3& n = plane.normal();
+    out = Eigen::Vector4f(n.x(), n.y(), n.z(), plane.distance() - effectiveRadius(n, radii));
+  };
   for (int k = 0; k < 3; ++k) {
-    for (const auto& [plane, slot] :
-         {std::pair{planes.edges()->Get(k), 2 * k}, std::pair{planes.caps()->Get(k), 2 * k + 1}}) {
-      const Vec3 n = toVec3(plane->normal());
-      c.grown[slot] << n, plane->distance() - effectiveRadius(n, radii);
-    }
+    grow(*planes.edges()->Get(k), grown.planes[2 * k]);
+    grow(*planes.caps()->Get(k), grown.planes[2 * k + 1]);
   }
-  c.grownReady = true;
+  grown.ready = true;
 }
 
 }  // namespace detail

@@ -24,28 +24,35 @@ struct FaceTest {
   float reach;
 };
 
-/// A triangle as the planes method tests it for one body. The six
-/// perpendicular planes pushed out by the body's extent along each are made
-/// only for the few candidates that pass the box test and the pre-check.
-struct PlanesCandidate {
-  Vec3 low, high;  ///< the triangle's box
-  std::uint32_t triangle;
-  FaceTest face;
-  bool grownReady = false;
-  /// (normal, offset): the centre is inside the grown triangle when
-  /// dot(normal, p) >= offset for all six; edges and caps interleaved.
-  std::array<Eigen::Vector4f, 6> grown;
+/// A triangle's six perpendicular planes (edges and caps) pushed out by a
+/// body's extent along each: the region the body's centre must enter to
+/// touch the triangle grown by the body (a superset of where it touches).
+/// Made only for the few candidates that pass the box test and the
+/// pre-check (growPlanes).
+struct GrownTriangle {
+  bool ready = false;
+  /// (normal, offset): inside when dot(normal, p) >= offset for all six.
+  std::array<Eigen::Vector4f, 6> planes;
 
-  /// Precondition: grownReady (growPlanes).
-  bool insideGrown(const Vec3& p) const {
-    for (const Eigen::Vector4f& plane : grown)
+  /// Precondition: ready.
+  bool inside(const Vec3& p) const {
+    for (const Eigen::Vector4f& plane : planes)
       if (plane.head<3>().dot(p) < plane.w()) return false;
     return true;
   }
 };
 
-/// Fills `c.grown` for `radii` (once: sets grownReady).
-void growPlanes(const World& world, EllipsoidRadii radii, PlanesCandidate& c);
+/// Fills `grown` for triangle `triangle` and `radii` (sets ready).
+void growPlanes(const World& world, std::uint32_t triangle, EllipsoidRadii radii,
+                GrownTriangle& grown);
+
+/// A triangle as the planes method tests it for one body.
+struct PlanesCandidate {
+  Vec3 low, high;  ///< the triangle's box
+  std::uint32_t triangle;
+  FaceTest face;
+  GrownTriangle grown;
+};
 
 /// A triangle as the exact sweep tests it for one body: in sphere space.
 struct ExactCandidate {
