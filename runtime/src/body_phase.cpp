@@ -146,6 +146,16 @@ void BodyGrid::build(std::span<const Body> bodies) {
 void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> bodies,
                      std::size_t first, std::size_t last, StepScratch& scratch,
                      std::span<StepReport> reports) {
+  std::vector<detail::BodyCache>& caches = scratch.workspace().bodies;
+  if (caches.size() < bodies.size()) caches.resize(bodies.size());
+  detail::pushRange(world, grid, bodies, first, last, scratch, reports, caches);
+}
+
+namespace detail {
+
+void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies, std::size_t first,
+               std::size_t last, StepScratch& scratch, std::span<StepReport> reports,
+               std::span<BodyCache> caches) {
   if (grid.entries_.size() < 2) return;
   for (std::size_t i = first; i < last; ++i) {
     Body& body = bodies[i];
@@ -209,9 +219,13 @@ void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> b
       const float closing = body.velocity.dot(away);
       if (closing < 0) body.velocity -= closing * away;
     }
+    // The push is a slide against the level with the body's own cache: its
+    // step has just made it cover the body's surroundings.
+    swapBodyCache(scratch, caches[i]);
     const SlideResult slide =
         slideAgainstLevel(world, body.position, body.position + push, body.radii, body.settings,
                           walkableNormalY(body.settings), scratch);
+    swapBodyCache(scratch, caches[i]);
     body.position = slide.end;
     if (!reports.empty()) {
       recordSlide(&reports[i], slide, false);
@@ -219,5 +233,7 @@ void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> b
     }
   }
 }
+
+}  // namespace detail
 
 }  // namespace bspf

@@ -171,16 +171,10 @@ void stepRangeAgainstLevel(const World& world, std::span<Body> bodies, std::span
   // answers only boxes inside the one it queried, whoever asks, and the
   // narrow phases test their candidates in triangle order, so results never
   // depend on what a cache held.
-  StepWorkspace& workspace = scratch.workspace();
-  auto swapIn = [&](BodyCache& cache) {
-    std::swap(scratch.nearby, cache.nearby);
-    std::swap(workspace.planes, cache.planes);
-    std::swap(workspace.exact, cache.exact);
-  };
   for (std::size_t i = 0; i < bodies.size(); ++i) {
-    swapIn(caches[i]);
+    swapBodyCache(scratch, caches[i]);
     stepBody(world, bodies[i], forces[i], dt, scratch, reports.empty() ? nullptr : &reports[i]);
-    swapIn(caches[i]);  // and out again
+    swapBodyCache(scratch, caches[i]);
   }
 }
 
@@ -216,10 +210,10 @@ void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3
       });
   BodyGrid& grid = scratches[0].bodyGrid;
   grid.build(bodies);
-  pool.parallelFor(bodies.size(), kBodiesPerRange,
-                   [&](int thread, std::size_t first, std::size_t last) {
-                     pushBodiesApart(world, grid, bodies, first, last, scratches[thread], reports);
-                   });
+  pool.parallelFor(
+      bodies.size(), kBodiesPerRange, [&](int thread, std::size_t first, std::size_t last) {
+        detail::pushRange(world, grid, bodies, first, last, scratches[thread], reports, caches);
+      });
 }
 
 }  // namespace bspf

@@ -170,8 +170,12 @@ void collectBoxCandidates(const World& world, const Vec3& low, const Vec3& high,
 
 void NearbyTriangles::cover(const World& world, const Vec3& low, const Vec3& high, float pad,
                             SweepScratch& scratch) {
+  // Reused while it holds the box, unless it is far larger than a query
+  // for this box would be: one long move (a big push, a fast fall) must not
+  // leave the body scanning a long list for many frames after.
+  const Vec3 spare = (high_ - low_) - (high - low);
   if (worldId_ == world.id() && (low.array() >= low_.array()).all() &&
-      (high.array() <= high_.array()).all())
+      (high.array() <= high_.array()).all() && (spare.array() <= 4 * pad + 0.1f).all())
     return;
   worldId_ = world.id();
   low_ = low - Vec3::Constant(pad);

@@ -92,6 +92,22 @@ struct StepWorkspace {
   std::vector<BodyCache> bodies;
 };
 
+/// Swaps `cache` with the body cache in use in `scratch` (its nearby
+/// triangles and the candidates made from them): call once to step the
+/// body with its own cache, again to put it back.
+inline void swapBodyCache(StepScratch& scratch, BodyCache& cache) {
+  StepWorkspace& workspace = scratch.workspace();
+  std::swap(scratch.nearby, cache.nearby);
+  std::swap(workspace.planes, cache.planes);
+  std::swap(workspace.exact, cache.exact);
+}
+
+/// pushBodiesApart with caches[i] as body i's cache. Precondition: caches
+/// is as long as bodies.
+void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies, std::size_t first,
+               std::size_t last, StepScratch& scratch, std::span<StepReport> reports,
+               std::span<BodyCache> caches);
+
 /// Steps bodies[i] against the level with caches[i] as its cache (see
 /// stepBodiesAgainstLevel). Precondition: caches is at least
 /// as long as bodies.

@@ -135,6 +135,9 @@ class StepScratch;
 class BodyGrid;
 namespace detail {
 struct StepWorkspace;  // the narrow phases' working lists, private to the runtime
+struct BodyCache;      // what one body keeps from frame to frame, likewise
+void pushRange(const World&, const BodyGrid&, std::span<Body>, std::size_t, std::size_t,
+               StepScratch&, std::span<StepReport>, std::span<BodyCache>);
 }  // namespace detail
 
 /// The most other bodies that push one body in one step: the nearest
@@ -188,8 +191,9 @@ class BodyGrid {
   std::size_t size() const { return slotOf_.size(); }
 
  private:
-  friend void pushBodiesApart(const World&, const BodyGrid&, std::span<Body>, std::size_t,
-                              std::size_t, StepScratch&, std::span<StepReport>);
+  friend void detail::pushRange(const World&, const BodyGrid&, std::span<Body>, std::size_t,
+                                std::size_t, StepScratch&, std::span<StepReport>,
+                                std::span<detail::BodyCache>);
   struct Entry {
     Vec3 position;
     EllipsoidRadii radii;

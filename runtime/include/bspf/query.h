@@ -91,7 +91,9 @@ class NearbyTriangles {
   /// Makes list() hold (at least) every triangle whose bounding box overlaps
   /// [low, high] (metres). Queries the tree for [low, high] grown by `pad`
   /// metres on every side only when [low, high] is not inside the box last
-  /// queried on this `world` (by World::id()). Preconditions: finite, low <= high, pad >= 0.
+  /// queried on this `world` (by World::id()), or when that box is more than
+  /// 4 * pad + 0.1 m larger along an axis (it would list too much). Preconditions: finite, low <=
+  /// high, pad >= 0.
   void cover(const World& world, const Vec3& low, const Vec3& high, float pad,
              SweepScratch& scratch);
   /// Forgets the last query, so the next cover() queries again.
