@@ -123,26 +123,6 @@ class CandidateGather {
   SweepScratch& scratch_;
 };
 
-namespace {
-
-// Grows a box by the query margin: kSweepMarginMetres plus about 4 ulp of
-// the coordinate, as at the tree's planes.
-void padBox(Vec3& low, Vec3& high) {
-  const Vec3 pad =
-      Vec3::Constant(kSweepMarginMetres) + 4e-7f * low.cwiseAbs().cwiseMax(high.cwiseAbs());
-  low -= pad;
-  high += pad;
-}
-
-}  // namespace
-
-Bounds sweptBounds(const Vec3& from, const Vec3& to, EllipsoidRadii radii) {
-  const Vec3 extent(radii.xz, radii.y, radii.xz);
-  Bounds b{from.cwiseMin(to) - extent, from.cwiseMax(to) + extent};
-  padBox(b.low, b.high);
-  return b;
-}
-
 void collectCandidateTriangles(const World& world, const Vec3& from, const Vec3& to,
                                EllipsoidRadii radii, SweepScratch& scratch,
                                std::vector<std::uint32_t>& trianglesOut) {
@@ -160,7 +140,7 @@ void collectBoxCandidates(const World& world, const Vec3& low, const Vec3& high,
   out.clear();
   scratch.leaves.clear();
   Vec3 paddedLow = low, paddedHigh = high;
-  padBox(paddedLow, paddedHigh);
+  padBounds(paddedLow, paddedHigh);
   collectBoxLeaves(world, paddedLow, paddedHigh, scratch.leaves);
   CandidateGather(world, scratch)
       .gather(paddedLow, paddedHigh, [&](std::uint32_t t, const schema::Box& box) {

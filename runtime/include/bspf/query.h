@@ -119,11 +119,25 @@ struct Bounds {
   Vec3 low, high;
 };
 
+/// Grows the box [low, high] by the queries' margin: kSweepMarginMetres plus
+/// about 4 ulp of the coordinates, as at the tree's planes.
+inline void padBounds(Vec3& low, Vec3& high) {
+  const Vec3 pad =
+      Vec3::Constant(kSweepMarginMetres) + 4e-7f * low.cwiseAbs().cwiseMax(high.cwiseAbs());
+  low -= pad;
+  high += pad;
+}
+
 /// The bounding box of the ellipsoid with `radii` swept from centre `from` to
-/// centre `to`, padded like the queries (kSweepMarginMetres plus about 4 ulp
-/// of the coordinates), so a triangle whose box misses it cannot touch the
-/// swept volume.
-Bounds sweptBounds(const Vec3& from, const Vec3& to, EllipsoidRadii radii);
+/// centre `to`, padded like the queries (padBounds), so a triangle whose box
+/// misses it cannot touch the swept volume. Inline: the step calls it once
+/// per slide iteration.
+inline Bounds sweptBounds(const Vec3& from, const Vec3& to, EllipsoidRadii radii) {
+  const Vec3 extent(radii.xz, radii.y, radii.xz);
+  Bounds b{from.cwiseMin(to) - extent, from.cwiseMax(to) + extent};
+  padBounds(b.low, b.high);
+  return b;
+}
 
 /// Whether the boxes [aLow, aHigh] and [bLow, bHigh] overlap (touching
 /// counts).
