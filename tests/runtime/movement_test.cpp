@@ -646,6 +646,33 @@ TEST_CASE(
   }
 }
 
+namespace {
+
+// A planes-method body falling 0.1 m through the offset plane of a floor
+// triangle's sharp corner, its centre `beyond` metres past the corner's cap
+// plane's offset along `tip` (unit, out of the corner): met (one slide, on
+// the offset plane) when it is within, missed when it is beyond.
+void requireCutByCapPlane(const bspf::World& world, const Vec3& tip,
+                          std::initializer_list<float> beyonds) {
+  bspf::StepScratch scratch;
+  for (const float beyond : beyonds) {
+    INFO("centre " << beyond << " m beyond the cap plane's offset");
+    Body body = floating((0.45f + beyond) * tip + Vec3(0, 0.9f, 0), bspf::CollisionMethod::Planes);
+    body.velocity = Vec3(0, -6, 0);  // 0.1 m this frame, through the offset plane at 0.85
+    bspf::StepReport report;
+    bspf::stepBody(world, body, Vec3::Zero(), kDt, scratch, &report);
+    if (beyond < 0) {
+      REQUIRE(report.iterations == 1);
+      REQUIRE(body.position.y() == Approx(0.851f).margin(1e-4));
+    } else {
+      REQUIRE(report.iterations == 0);
+      REQUIRE(body.position.y() == Approx(0.8f).margin(1e-4));
+    }
+  }
+}
+
+}  // namespace
+
 TEST_CASE(
     "the planes method's grown triangle is cut at a sharp corner by the cap plane, "
     "the body's horizontal radius beyond the corner",
@@ -657,21 +684,8 @@ TEST_CASE(
   mesh.vertices = {{0, 0, 0}, {10, 0, 1}, {10, 0, -1}};
   mesh.triangles = {{0, 1, 2}};
   const Level level(mesh);
+  requireCutByCapPlane(level.world, Vec3(-1, 0, 0), {-0.01f, 0.01f, 0.3f});
   bspf::StepScratch scratch;
-  for (const float beyond : {-0.01f, 0.01f, 0.3f}) {
-    INFO("centre " << beyond << " m beyond the cap plane's offset");
-    Body body = floating({-0.45f - beyond, 0.9f, 0}, bspf::CollisionMethod::Planes);
-    body.velocity = Vec3(0, -6, 0);  // 0.1 m this frame, through the offset plane at 0.85
-    bspf::StepReport report;
-    bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch, &report);
-    if (beyond < 0) {
-      REQUIRE(report.iterations == 1);
-      REQUIRE(body.position.y() == Approx(0.851f).margin(1e-4));
-    } else {
-      REQUIRE(report.iterations == 0);
-      REQUIRE(body.position.y() == Approx(0.8f).margin(1e-4));
-    }
-  }
   SECTION("the exact sweep lets a body beyond the corner's reach fall past it") {
     for (const float beyond : {0.01f, 0.3f}) {
       INFO("centre " << beyond << " m beyond the corner's reach");
@@ -790,4 +804,42 @@ TEST_CASE(
       REQUIRE((threaded[g][i].position.array() == sequential[g][i].position.array()).all());
       REQUIRE((threaded[g][i].velocity.array() == sequential[g][i].velocity.array()).all());
     }
+}
+
+TEST_CASE(
+    "the planes method's grown triangle is cut by the cap plane at a sharp corner pointing "
+    "diagonally, where the triangle's box does not reject the body",
+    "[runtime][movement]") {
+  // The 11 degree corner of the cap-plane test above, turned 45 degrees
+  // about y to point along -x -z: a body just beyond the cap plane's offset
+  // there still overlaps the triangle's box, so only the cap plane stops the
+  // grown edges from reaching it.
+  bspc::Mesh mesh;
+  mesh.vertices = {{0, 0, 0}, {6.364, 0, 7.778}, {7.778, 0, 6.364}};
+  mesh.triangles = {{0, 1, 2}};
+  const Level level(mesh);
+  requireCutByCapPlane(level.world, Vec3(-std::sqrt(0.5f), 0, -std::sqrt(0.5f)),
+                       {-0.01f, 0.01f, 0.1f});
+}
+
+TEST_CASE(
+    "a body starting within a wall's offset surface and moving along it off the wall's end is "
+    "pushed out of it, not carried off inside it",
+    "[runtime][movement]") {
+  // The wall's face x = 5 ends at z = 10; the move ends beyond the grown
+  // face, so only the test at the start sees the body within it.
+  bspc::Mesh mesh = floorSlab();
+  bspf::test::append(mesh, bspf::test::boxMesh({5, 0, -10}, {5.01, 4, 10}));
+  const Level level(mesh);
+  const bspf::CollisionMethod method = eachMethod();
+  INFO(nameOf(method));
+  bspf::StepScratch scratch;
+  for (const float inside : {0.02f, 0.2f}) {
+    INFO("started " << inside << " m within the offset surface");
+    Body body = floating({5 - 0.45f + inside, 2, 9.9f}, method);
+    body.velocity = Vec3(0, 0, 60);  // 1 m this frame, to z = 10.9
+    bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch);
+    REQUIRE(body.position.x() <= 5 - 0.45f + 2e-3f);
+    REQUIRE(body.position.z() > 10);
+  }
 }
