@@ -239,7 +239,7 @@ struct QueryBox {
 };
 
 // Query boxes of all sizes: a quarter anywhere, the rest placed beside a
-// random point of a random triangle, along one axis, half a query margin
+// random triangle's outermost corner along one axis, half a query margin
 // away (so the triangle must be listed) or three margins away.
 std::vector<QueryBox> queryBoxes(const bspf::World& world, int count, std::uint32_t seed) {
   std::mt19937 rng(seed);
@@ -253,18 +253,21 @@ std::vector<QueryBox> queryBoxes(const bspf::World& world, int count, std::uint3
       boxes.push_back({{low, low + size}, std::nullopt});
       continue;
     }
+    // Beyond the triangle's corner that is furthest out on that side, so
+    // the triangle's box does not reach the query box itself.
     const std::uint32_t t = pick(rng);
     const auto& tri = world.triangles()[t];
-    float u = unit(rng), v = unit(rng);
-    if (u + v > 1) u = 1 - u, v = 1 - v;
-    const Vec3 a = bspf::toVec3(world.vertices()[tri.v0()]);
-    const Vec3 p = a + u * (bspf::toVec3(world.vertices()[tri.v1()]) - a) +
-                   v * (bspf::toVec3(world.vertices()[tri.v2()]) - a);
     const int axis = int(rng() % 3);
+    const bool above = rng() % 2;
+    Vec3 p = bspf::toVec3(world.vertices()[tri.v0()]);
+    for (const std::uint32_t v : {tri.v1(), tri.v2()}) {
+      const Vec3 corner = bspf::toVec3(world.vertices()[v]);
+      if (above ? corner[axis] > p[axis] : corner[axis] < p[axis]) p = corner;
+    }
     const bool near = i % 2 == 1;
     const float gap = (near ? 0.5f : 3.0f) * bspf::kSweepMarginMetres;
     Vec3 low = p - size.cwiseProduct(Vec3(unit(rng), unit(rng), unit(rng)));
-    low[axis] = rng() % 2 ? p[axis] + gap : p[axis] - gap - size[axis];
+    low[axis] = above ? p[axis] + gap : p[axis] - gap - size[axis];
     boxes.push_back({{low, low + size}, near ? std::optional(t) : std::nullopt});
   }
   return boxes;
