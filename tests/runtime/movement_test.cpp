@@ -843,3 +843,22 @@ TEST_CASE(
     REQUIRE(body.position.z() > 10);
   }
 }
+
+TEST_CASE("a body running up a walkable slope under a low ceiling never ends inside the ceiling",
+          "[runtime][movement]") {
+  // A 40 degree slope lifts a 1 m uphill move by about 0.84 m: the planes
+  // method's slide moves the end straight up onto the slope, far above the
+  // box the move itself sweeps, and into a ceiling 1.3 m above the start.
+  bspc::Mesh mesh = slope(40);
+  const float startY = 2.62f;  // just above the slope at z = 2
+  const float ceiling = startY + 1.3f;
+  bspf::test::append(mesh, bspf::test::boxMesh({-4, ceiling, -20}, {4, ceiling + 1, 20}));
+  const Level level(mesh);
+  const bspf::CollisionMethod method = eachMethod();
+  INFO(nameOf(method));
+  bspf::StepScratch scratch;
+  Body body = floating({0, startY, 2}, method);
+  body.velocity = Vec3(0, 0, 60);  // 1 m uphill this frame
+  bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch);
+  REQUIRE(body.position.y() + 0.85f <= ceiling + 2e-3f);
+}
