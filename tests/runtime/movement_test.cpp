@@ -815,11 +815,15 @@ TEST_CASE(
   // there still overlaps the triangle's box, so only the cap plane stops the
   // grown edges from reaching it.
   bspc::Mesh mesh;
+  // Listed from each corner in turn: each of the three cap planes cuts it.
   mesh.vertices = {{0, 0, 0}, {6.364, 0, 7.778}, {7.778, 0, 6.364}};
-  mesh.triangles = {{0, 1, 2}};
-  const Level level(mesh);
-  requireCutByCapPlane(level.world, Vec3(-std::sqrt(0.5f), 0, -std::sqrt(0.5f)),
-                       {-0.01f, 0.01f, 0.1f});
+  for (const std::uint32_t first : {0u, 1u, 2u}) {
+    INFO("the corner is listed " << (3 - first) % 3 << " in the triangle");
+    mesh.triangles = {{first, (first + 1) % 3, (first + 2) % 3}};
+    const Level level(mesh);
+    requireCutByCapPlane(level.world, Vec3(-std::sqrt(0.5f), 0, -std::sqrt(0.5f)),
+                         {-0.01f, 0.01f, 0.1f});
+  }
 }
 
 TEST_CASE(
