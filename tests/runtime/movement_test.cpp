@@ -671,6 +671,25 @@ void requireCutByCapPlane(const bspf::World& world, const Vec3& tip,
   }
 }
 
+// An exact-sweep body falling 1 m past a floor triangle's sharp corner, its
+// centre `beyond` metres beyond the corner's reach along `tip` (unit, out of
+// the corner): it touches nothing, not even the corner's edges' lines
+// beyond the corner.
+void requireFallsPastCorner(const bspf::World& world, const Vec3& tip,
+                            std::initializer_list<float> beyonds) {
+  bspf::StepScratch scratch;
+  for (const float beyond : beyonds) {
+    INFO("centre " << beyond << " m beyond the corner's reach");
+    Body body =
+        floating((0.45f + beyond) * tip + Vec3(0, 0.9f, 0), bspf::CollisionMethod::ExactSweep);
+    body.velocity = Vec3(0, -60, 0);  // 1 m this frame, down past the corner
+    bspf::StepReport report;
+    bspf::stepBody(world, body, Vec3::Zero(), kDt, scratch, &report);
+    REQUIRE(report.iterations == 0);
+    REQUIRE(body.position.y() == Approx(-0.1f).margin(1e-4));
+  }
+}
+
 }  // namespace
 
 TEST_CASE(
@@ -685,17 +704,8 @@ TEST_CASE(
   mesh.triangles = {{0, 1, 2}};
   const Level level(mesh);
   requireCutByCapPlane(level.world, Vec3(-1, 0, 0), {-0.01f, 0.01f, 0.3f});
-  bspf::StepScratch scratch;
   SECTION("the exact sweep lets a body beyond the corner's reach fall past it") {
-    for (const float beyond : {0.01f, 0.3f}) {
-      INFO("centre " << beyond << " m beyond the corner's reach");
-      Body body = floating({-0.45f - beyond, 0.9f, 0}, bspf::CollisionMethod::ExactSweep);
-      body.velocity = Vec3(0, -60, 0);  // 1 m this frame, down past the corner
-      bspf::StepReport report;
-      bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch, &report);
-      REQUIRE(report.iterations == 0);
-      REQUIRE(body.position.y() == Approx(-0.1f).margin(1e-4));
-    }
+    requireFallsPastCorner(level.world, Vec3(-1, 0, 0), {0.01f, 0.3f});
   }
 }
 
@@ -821,8 +831,10 @@ TEST_CASE(
     INFO("the corner is listed " << (3 - first) % 3 << " in the triangle");
     mesh.triangles = {{first, (first + 1) % 3, (first + 2) % 3}};
     const Level level(mesh);
-    requireCutByCapPlane(level.world, Vec3(-std::sqrt(0.5f), 0, -std::sqrt(0.5f)),
-                         {-0.01f, 0.01f, 0.1f});
+    const Vec3 tip(-std::sqrt(0.5f), 0, -std::sqrt(0.5f));
+    requireCutByCapPlane(level.world, tip, {-0.01f, 0.01f, 0.1f});
+    // Nor does the exact sweep meet the corner's edges beyond their ends.
+    requireFallsPastCorner(level.world, tip, {0.01f, 0.1f});
   }
 }
 
