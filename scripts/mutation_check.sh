@@ -31,13 +31,16 @@ tree="$scratch/tree" build="$scratch/build"
 mkdir -p "$tree"
 
 # The tracked files (and uncommitted edits to them), copied only when they
-# differ, so their timestamps and the incremental build stay valid.
+# differ, so the unchanged ones keep their timestamps and the incremental
+# build stays valid. A changed file gets a new timestamp: kept, the source's
+# could be older than an object the last run built from its older content
+# (edited while that run was building), and the edit would never be built.
 (cd "$root" && git ls-files -z --cached --others --exclude-standard) |
   while IFS= read -r -d '' file; do
     [ -f "$root/$file" ] || continue
     if ! cmp -s "$root/$file" "$tree/$file"; then
       mkdir -p "$(dirname "$tree/$file")"
-      cp -p "$root/$file" "$tree/$file"
+      cp "$root/$file" "$tree/$file"
     fi
   done
 

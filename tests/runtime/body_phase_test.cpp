@@ -205,3 +205,66 @@ TEST_CASE(
   for (const int q : quadrants) REQUIRE(q > 200);
   REQUIRE(farthest > 2);
 }
+
+TEST_CASE(
+    "a body overlapped by more than kMaxBodyPushes bodies is pushed by the nearest ones, "
+    "not by the first found",
+    "[runtime][movement]") {
+  const bspf::test::CompiledMesh level(bspf::test::boxMesh({-20, -1, -20}, {20, 0, 20}));
+  // Body 0 in the middle of one grid cell (1.8 m: four radii), kMaxBodyPushes
+  // bodies just overlapping it on its +x side, listed first, and one deep
+  // in it on its -x side, listed last: all in body 0's cell.
+  const float y = 0.85f;
+  std::vector<Body> bodies;
+  Body centre;
+  centre.position = Vec3(0.9f, y, 0.9f);
+  bodies.push_back(centre);
+  for (int k = 0; k < bspf::kMaxBodyPushes; ++k) {
+    const float angle =
+        (-40.0f + 80.0f * float(k) / float(bspf::kMaxBodyPushes - 1)) * 3.14159265f / 180.0f;
+    Body b;
+    b.position = centre.position + 0.85f * Vec3(std::cos(angle), 0, std::sin(angle));
+    bodies.push_back(b);
+  }
+  Body deep;
+  deep.position = centre.position - Vec3(0.3f, 0, 0);
+  bodies.push_back(deep);
+  const std::vector<Vec3> forces(bodies.size(), Vec3::Zero());
+  std::vector<bspf::StepReport> reports(bodies.size());
+  bspf::StepScratch scratch;
+  bspf::stepBodies(level.world, bodies, forces, kDt, scratch, reports);
+  REQUIRE(reports[0].bodyContacts == bspf::kMaxBodyPushes);
+  // The deep overlap (0.6 m, half of it a push to +x) outweighs the shallow
+  // ones (0.05 m each, pushing to -x): it must be among the pushers.
+  REQUIRE(bodies[0].position.x() > centre.position.x() + 0.05f);
+}
+
+TEST_CASE(
+    "two bodies overlapping one above the other across grid cells push each other apart "
+    "equally",
+    "[runtime][movement]") {
+  // Cells are twice as tall as the tallest body (3.4 m): the lower body's
+  // centre at y = 1.53 and the upper's 1.5 m above it, 0.3 m aside. In
+  // cells half as tall, the upper body's nearer neighbour cell would be the
+  // one above it, and it would never see the lower body.
+  const bspf::test::CompiledMesh level(bspf::test::boxMesh({-20, -1, -20}, {20, 0.68, 20}));
+  Body low, high;
+  low.position = Vec3(0.9f, 1.53f, 0.9f);
+  high.position = Vec3(1.2f, 3.03f, 0.9f);
+  for (const bool lowFirst : {true, false}) {
+    INFO((lowFirst ? "lower body first" : "upper body first"));
+    std::vector<Body> bodies = lowFirst ? std::vector{low, high} : std::vector{high, low};
+    const std::size_t l = lowFirst ? 0 : 1, h = 1 - l;
+    const std::vector<Vec3> forces(2, Vec3::Zero());
+    std::vector<bspf::StepReport> reports(2);
+    bspf::StepScratch scratch;
+    bspf::stepBodies(level.world, bodies, forces, kDt, scratch, reports);
+    REQUIRE(reports[l].bodyContacts == 1);
+    REQUIRE(reports[h].bodyContacts == 1);
+    const float lowMove = bodies[l].position.x() - low.position.x();
+    const float highMove = bodies[h].position.x() - high.position.x();
+    REQUIRE(lowMove < -0.01f);
+    REQUIRE(highMove > 0.01f);
+    REQUIRE(lowMove == Approx(-highMove).margin(1e-5));
+  }
+}

@@ -965,6 +965,22 @@ TEST_CASE("Semantic violations are Malformed with a message saying what is wrong
              schema::Box(schema::Vec3(low.x(), std::nextafter(low.y(), 1e30f), low.z()), box.max());
        },
        "bounding box of leaf triangle entry 0"},
+      {"a leaf entry's box one ulp short of its triangle's highest z",
+       [](Content& c) {
+         schema::Box& box = c.leafBounds[c.leafBounds.size() / 2];
+         const schema::Vec3& high = box.max();
+         box = schema::Box(box.min(),
+                           schema::Vec3(high.x(), high.y(), std::nextafter(high.z(), -1e30f)));
+       },
+       "bounding box of leaf triangle entry"},
+      {"a leaf entry's box one ulp above its triangle's lowest z",
+       [](Content& c) {
+         schema::Box& box = c.leafBounds.front();
+         const schema::Vec3& low = box.min();
+         box =
+             schema::Box(schema::Vec3(low.x(), low.y(), std::nextafter(low.z(), 1e30f)), box.max());
+       },
+       "bounding box of leaf triangle entry 0"},
       {"a NaN in a leaf entry's box",
        [](Content& c) {
          schema::Box& box = c.leafBounds.front();

@@ -646,6 +646,52 @@ TEST_CASE(
   }
 }
 
+namespace {
+
+// A planes-method body falling 0.1 m through the offset plane of a floor
+// triangle's sharp corner, its centre `beyond` metres past the corner's cap
+// plane's offset along `tip` (unit, out of the corner): met (one slide, on
+// the offset plane) when it is within, missed when it is beyond.
+void requireCutByCapPlane(const bspf::World& world, const Vec3& tip,
+                          std::initializer_list<float> beyonds) {
+  bspf::StepScratch scratch;
+  for (const float beyond : beyonds) {
+    INFO("centre " << beyond << " m beyond the cap plane's offset");
+    Body body = floating((0.45f + beyond) * tip + Vec3(0, 0.9f, 0), bspf::CollisionMethod::Planes);
+    body.velocity = Vec3(0, -6, 0);  // 0.1 m this frame, through the offset plane at 0.85
+    bspf::StepReport report;
+    bspf::stepBody(world, body, Vec3::Zero(), kDt, scratch, &report);
+    if (beyond < 0) {
+      REQUIRE(report.iterations == 1);
+      REQUIRE(body.position.y() == Approx(0.851f).margin(1e-4));
+    } else {
+      REQUIRE(report.iterations == 0);
+      REQUIRE(body.position.y() == Approx(0.8f).margin(1e-4));
+    }
+  }
+}
+
+// An exact-sweep body falling 1 m past a floor triangle's sharp corner, its
+// centre `beyond` metres beyond the corner's reach along `tip` (unit, out of
+// the corner): it touches nothing, not even the corner's edges' lines
+// beyond the corner.
+void requireFallsPastCorner(const bspf::World& world, const Vec3& tip,
+                            std::initializer_list<float> beyonds) {
+  bspf::StepScratch scratch;
+  for (const float beyond : beyonds) {
+    INFO("centre " << beyond << " m beyond the corner's reach");
+    Body body =
+        floating((0.45f + beyond) * tip + Vec3(0, 0.9f, 0), bspf::CollisionMethod::ExactSweep);
+    body.velocity = Vec3(0, -60, 0);  // 1 m this frame, down past the corner
+    bspf::StepReport report;
+    bspf::stepBody(world, body, Vec3::Zero(), kDt, scratch, &report);
+    REQUIRE(report.iterations == 0);
+    REQUIRE(body.position.y() == Approx(-0.1f).margin(1e-4));
+  }
+}
+
+}  // namespace
+
 TEST_CASE(
     "the planes method's grown triangle is cut at a sharp corner by the cap plane, "
     "the body's horizontal radius beyond the corner",
@@ -657,31 +703,9 @@ TEST_CASE(
   mesh.vertices = {{0, 0, 0}, {10, 0, 1}, {10, 0, -1}};
   mesh.triangles = {{0, 1, 2}};
   const Level level(mesh);
-  bspf::StepScratch scratch;
-  for (const float beyond : {-0.01f, 0.01f, 0.3f}) {
-    INFO("centre " << beyond << " m beyond the cap plane's offset");
-    Body body = floating({-0.45f - beyond, 0.9f, 0}, bspf::CollisionMethod::Planes);
-    body.velocity = Vec3(0, -6, 0);  // 0.1 m this frame, through the offset plane at 0.85
-    bspf::StepReport report;
-    bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch, &report);
-    if (beyond < 0) {
-      REQUIRE(report.iterations == 1);
-      REQUIRE(body.position.y() == Approx(0.851f).margin(1e-4));
-    } else {
-      REQUIRE(report.iterations == 0);
-      REQUIRE(body.position.y() == Approx(0.8f).margin(1e-4));
-    }
-  }
+  requireCutByCapPlane(level.world, Vec3(-1, 0, 0), {-0.01f, 0.01f, 0.3f});
   SECTION("the exact sweep lets a body beyond the corner's reach fall past it") {
-    for (const float beyond : {0.01f, 0.3f}) {
-      INFO("centre " << beyond << " m beyond the corner's reach");
-      Body body = floating({-0.45f - beyond, 0.9f, 0}, bspf::CollisionMethod::ExactSweep);
-      body.velocity = Vec3(0, -60, 0);  // 1 m this frame, down past the corner
-      bspf::StepReport report;
-      bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch, &report);
-      REQUIRE(report.iterations == 0);
-      REQUIRE(body.position.y() == Approx(-0.1f).margin(1e-4));
-    }
+    requireFallsPastCorner(level.world, Vec3(-1, 0, 0), {0.01f, 0.3f});
   }
 }
 
@@ -790,4 +814,67 @@ TEST_CASE(
       REQUIRE((threaded[g][i].position.array() == sequential[g][i].position.array()).all());
       REQUIRE((threaded[g][i].velocity.array() == sequential[g][i].velocity.array()).all());
     }
+}
+
+TEST_CASE(
+    "the planes method's grown triangle is cut by the cap plane at a sharp corner pointing "
+    "diagonally, where the triangle's box does not reject the body",
+    "[runtime][movement]") {
+  // The 11 degree corner of the cap-plane test above, turned 45 degrees
+  // about y to point along -x -z: a body just beyond the cap plane's offset
+  // there still overlaps the triangle's box, so only the cap plane stops the
+  // grown edges from reaching it.
+  bspc::Mesh mesh;
+  // Listed from each corner in turn: each of the three cap planes cuts it.
+  mesh.vertices = {{0, 0, 0}, {6.364, 0, 7.778}, {7.778, 0, 6.364}};
+  for (const std::uint32_t first : {0u, 1u, 2u}) {
+    INFO("the corner is listed " << (3 - first) % 3 << " in the triangle");
+    mesh.triangles = {{first, (first + 1) % 3, (first + 2) % 3}};
+    const Level level(mesh);
+    const Vec3 tip(-std::sqrt(0.5f), 0, -std::sqrt(0.5f));
+    requireCutByCapPlane(level.world, tip, {-0.01f, 0.01f, 0.1f});
+    // Nor does the exact sweep meet the corner's edges beyond their ends.
+    requireFallsPastCorner(level.world, tip, {0.01f, 0.1f});
+  }
+}
+
+TEST_CASE(
+    "a body starting within a wall's offset surface and moving along it off the wall's end is "
+    "pushed out of it, not carried off inside it",
+    "[runtime][movement]") {
+  // The wall's face x = 5 ends at z = 10; the move ends beyond the grown
+  // face, so only the test at the start sees the body within it.
+  bspc::Mesh mesh = floorSlab();
+  bspf::test::append(mesh, bspf::test::boxMesh({5, 0, -10}, {5.01, 4, 10}));
+  const Level level(mesh);
+  const bspf::CollisionMethod method = eachMethod();
+  INFO(nameOf(method));
+  bspf::StepScratch scratch;
+  for (const float inside : {0.02f, 0.2f}) {
+    INFO("started " << inside << " m within the offset surface");
+    Body body = floating({5 - 0.45f + inside, 2, 9.9f}, method);
+    body.velocity = Vec3(0, 0, 60);  // 1 m this frame, to z = 10.9
+    bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch);
+    REQUIRE(body.position.x() <= 5 - 0.45f + 2e-3f);
+    REQUIRE(body.position.z() > 10);
+  }
+}
+
+TEST_CASE("a body running up a walkable slope under a low ceiling never ends inside the ceiling",
+          "[runtime][movement]") {
+  // A 40 degree slope lifts a 1 m uphill move by about 0.84 m: the planes
+  // method's slide moves the end straight up onto the slope, far above the
+  // box the move itself sweeps, and into a ceiling 1.3 m above the start.
+  bspc::Mesh mesh = slope(40);
+  const float startY = 2.62f;  // just above the slope at z = 2
+  const float ceiling = startY + 1.3f;
+  bspf::test::append(mesh, bspf::test::boxMesh({-4, ceiling, -20}, {4, ceiling + 1, 20}));
+  const Level level(mesh);
+  const bspf::CollisionMethod method = eachMethod();
+  INFO(nameOf(method));
+  bspf::StepScratch scratch;
+  Body body = floating({0, startY, 2}, method);
+  body.velocity = Vec3(0, 0, 60);  // 1 m uphill this frame
+  bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch);
+  REQUIRE(body.position.y() + 0.85f <= ceiling + 2e-3f);
 }
