@@ -69,7 +69,7 @@ class LocalCandidates {
         (swept.high.array() <= local_.high.array()).all())
       return listed_;
     valid_ = true;
-    const Vec3 grow = Vec3::Constant(0.25f * moveLength + kLocalGrowMetres);
+    const Vec3 grow = Vec3::Constant(0.05f * moveLength + kLocalGrowMetres);
     local_ = {swept.low - grow, swept.high + grow};
     scratch.nearby.cover(world, local_.low, local_.high, nearbyPad(moveLength), scratch.sweep);
     if (made_.query != scratch.nearby.queryId() || made_.radii.xz != radii.xz ||
