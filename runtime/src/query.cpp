@@ -8,11 +8,22 @@
 
 namespace bspf {
 
-void collectSweptLeaves(const World& world, const Vec3& from, const Vec3& to, EllipsoidRadii radii,
-                        std::vector<std::uint32_t>& leavesOut) {
-  assert(radii.xz > 0 && radii.y > 0);
+namespace {
+
+// At one node: the child on the query's near side, and which children the
+// query reaches.
+struct Visit {
+  bool nearIsFront;
+  bool visitNear;
+  bool visitFar;
+};
+
+// Appends every leaf a query reaches, depth first and near side first (the
+// order a path passes them), `visitOf(split)` deciding at each node.
+// Near-first order pushes at most one far child per level.
+template <typename VisitOf>
+void collectLeaves(const World& world, std::vector<std::uint32_t>& leavesOut, VisitOf visitOf) {
   const std::span<const schema::Node> nodes = world.nodes();
-  // Near-first depth-first order pushes at most one far child per level.
   std::array<std::int32_t, kMaxTreeDepth + 2> stack;
   std::size_t top = 0;
   stack[top++] = world.root();
@@ -23,7 +34,21 @@ void collectSweptLeaves(const World& world, const Vec3& from, const Vec3& to, El
       continue;
     }
     const schema::Node& node = nodes[ref];
-    const schema::Plane& split = node.split();
+    const Visit visit = visitOf(node.split());
+    const std::int32_t nearChild = visit.nearIsFront ? node.front() : node.back();
+    const std::int32_t farChild = visit.nearIsFront ? node.back() : node.front();
+    const bool visitNear = visit.visitNear, visitFar = visit.visitFar;
+    if (visitFar) stack[top++] = farChild;
+    if (visitNear) stack[top++] = nearChild;
+  }
+}
+
+}  // namespace
+
+void collectSweptLeaves(const World& world, const Vec3& from, const Vec3& to, EllipsoidRadii radii,
+                        std::vector<std::uint32_t>& leavesOut) {
+  assert(radii.xz > 0 && radii.y > 0);
+  collectLeaves(world, leavesOut, [&](const schema::Plane& split) {
     const float reach = effectiveRadius(split.normal(), radii) + kSweepMarginMetres +
                         std::abs(split.distance()) * 4e-7f;
     const float startSide = signedDistance(split, from);
@@ -31,13 +56,9 @@ void collectSweptLeaves(const World& world, const Vec3& from, const Vec3& to, El
     const bool touchesFront = std::max(startSide, endSide) > -reach;
     const bool touchesBack = std::min(startSide, endSide) < reach;
     const bool startsInFront = startSide >= 0;
-    const std::int32_t nearChild = startsInFront ? node.front() : node.back();
-    const std::int32_t farChild = startsInFront ? node.back() : node.front();
-    const bool visitNear = startsInFront ? touchesFront : touchesBack;
-    const bool visitFar = startsInFront ? touchesBack : touchesFront;
-    if (visitFar) stack[top++] = farChild;
-    if (visitNear) stack[top++] = nearChild;
-  }
+    return startsInFront ? Visit{true, touchesFront, touchesBack}
+                         : Visit{false, touchesBack, touchesFront};
+  });
 }
 
 std::uint32_t locateLeaf(const World& world, const Vec3& p) {
@@ -52,20 +73,9 @@ std::uint32_t locateLeaf(const World& world, const Vec3& p) {
 void collectBoxLeaves(const World& world, const Vec3& low, const Vec3& high,
                       std::vector<std::uint32_t>& leavesOut) {
   assert((low.array() <= high.array()).all());
-  const std::span<const schema::Node> nodes = world.nodes();
   const Vec3 centre = 0.5f * (low + high);
   const Vec3 half = 0.5f * (high - low);
-  std::array<std::int32_t, kMaxTreeDepth + 2> stack;
-  std::size_t top = 0;
-  stack[top++] = world.root();
-  while (top > 0) {
-    const std::int32_t ref = stack[--top];
-    if (ref < 0) {
-      leavesOut.push_back(static_cast<std::uint32_t>(-(ref + 1)));
-      continue;
-    }
-    const schema::Node& node = nodes[ref];
-    const schema::Plane& split = node.split();
+  collectLeaves(world, leavesOut, [&](const schema::Plane& split) {
     const schema::Vec3& n = split.normal();
     // The box's extent along the normal: its support function.
     const float reach = std::abs(n.x()) * half.x() + std::abs(n.y()) * half.y() +
@@ -74,10 +84,8 @@ void collectBoxLeaves(const World& world, const Vec3& low, const Vec3& high,
     const float side = signedDistance(split, centre);
     // The centre's side always overlaps the box; the far side when the
     // plane passes within the box's reach.
-    const bool inFront = side >= 0;
-    if (std::abs(side) < reach) stack[top++] = inFront ? node.back() : node.front();
-    stack[top++] = inFront ? node.front() : node.back();
-  }
+    return Visit{side >= 0, true, std::abs(side) < reach};
+  });
 }
 
 // Lists each triangle of the current query's leaves (scratch.leaves) once:
