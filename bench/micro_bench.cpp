@@ -62,7 +62,7 @@ struct PreCheckInput {
 };
 
 struct PointInput {
-  bspf::detail::PlanesCandidate candidate;  // the six planes grown for kRadii
+  bspf::detail::GrownTriangle grown;  // the six planes grown for kRadii
   Vec3 point;
 };
 
@@ -133,9 +133,8 @@ void gatherInputs(Level& level) {
     collectCandidateTriangles(world, m.from, m.to, kRadii, scratch, candidates);
     for (const std::uint32_t t : candidates) {
       const bspf::schema::TrianglePlanes& planes = world.trianglePlanes()[t];
-      bspf::detail::PlanesCandidate grown =
-          bspf::detail::makePlanesCandidate(world, {t, Vec3::Zero(), Vec3::Zero()}, kRadii);
-      bspf::detail::growPlanes(world, t, kRadii, grown.grown);
+      bspf::detail::GrownTriangle grown;
+      bspf::detail::growPlanes(world, t, kRadii, grown);
       level.preChecks.push_back({&planes.face(), m.from, m.to});
       // The points findBlockingTriangle tests.
       const bspf::detail::SideValues sides =
@@ -221,7 +220,7 @@ void preCheck(benchmark::State& state, const Level& level) {
 
 void insideGrownTriangle(benchmark::State& state, const Level& level) {
   cycle(state, level.points, [](const PointInput& x) {
-    bool inside = x.candidate.grown.inside(x.point);
+    bool inside = x.grown.inside(x.point);
     benchmark::DoNotOptimize(inside);
   });
 }

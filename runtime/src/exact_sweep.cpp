@@ -6,6 +6,7 @@
 // corners. Triangles are one-sided, as in the planes method: a centre behind
 // a triangle's plane ignores it.
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 
@@ -33,47 +34,65 @@ bool earliestRoot(double a, double b, double c, double& t) {
 namespace detail {
 
 // The earliest impact of the unit sphere moving from p along v (t in [0, 1])
-// with triangle `tri`, if it comes before `best`. In double precision, and
+// with triangle `tri`, if it comes before `best`, in two stages: the face
+// (faceImpact), then the edges and corners (edgeImpact), which only a
+// triangle whose face stage leaves it open needs. In double precision, and
 // relative to the start point: a body resting on an edge far from the
 // triangle's corners loses the contact to cancellation in float.
-// Sets `penetrating` when the start is already within the unit distance of
-// the triangle (in front of it).
 void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best,
                     bool& penetrating) {
+  if (faceImpact(tri, pf, vf, best, penetrating) < best.time) edgeImpact(tri, pf, vf, best);
+}
+
+double faceImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best,
+                  bool& penetrating) {
   using V = Eigen::Vector3d;
+  constexpr double kSettled = std::numeric_limits<double>::infinity();
   const V p = pf.cast<double>(), v = vf.cast<double>(), n = tri.normal.cast<double>();
-  const V corners[3] = {tri.a.cast<double>() - p, tri.b.cast<double>() - p,
-                        tri.c.cast<double>() - p};  // relative to the start
-  const double startSide = -n.dot(corners[0]);
-  if (startSide < 0) return;  // behind: one-sided
+  const V a = tri.a.cast<double>() - p;  // relative to the start
+  const double startSide = -n.dot(a);
+  if (startSide < 0) return kSettled;  // behind: one-sided
   if (startSide < 1) {
     // Already within reach (recovery could not clear it all): never let the
     // move go deeper. Moving towards the closest point is an impact now.
-    const V closest = closestPointOnTriangle<V>(V::Zero(), corners[0], corners[1], corners[2]);
+    const V closest =
+        closestPointOnTriangle<V>(V::Zero(), a, tri.b.cast<double>() - p, tri.c.cast<double>() - p);
     const double distance = closest.norm();
     if (distance < 1) {
       penetrating = true;
       const V away = distance > 1e-9 ? V(-closest / distance) : n;
       if (away.dot(v) < 0 && 0 < best.time) best = {0.0f, away.cast<float>()};
-      return;
+      return kSettled;
     }
+    return 0;  // within reach of the plane, not of the triangle: its edges may come first
   }
-  // Face: the sphere first touches the plane at distance 1; if that point of
-  // the plane is inside the triangle it is the first touch of the triangle.
+  // Outside the plane's reach, the sphere touches no point of the triangle
+  // before it touches the plane, at distance 1: if it never does within the
+  // move, nothing is touched; if that point of the plane is inside the
+  // triangle, it is the first touch.
   const double approach = n.dot(v);
-  if (approach < 0 && startSide >= 1) {
-    const double t = (startSide - 1) / -approach;
-    if (t <= 1 && t < best.time) {
-      const V touch = t * v - n;
-      bool inside = true;
-      for (int k = 0; k < 3 && inside; ++k)
-        inside = n.dot((corners[(k + 1) % 3] - corners[k]).cross(touch - corners[k])) >= 0;
-      if (inside) {
-        best = {float(t), tri.normal};
-        return;
-      }
+  if (approach >= 0) return kSettled;
+  const double t = (startSide - 1) / -approach;
+  if (t > 1) return kSettled;
+  if (t < best.time) {
+    const V corners[3] = {a, tri.b.cast<double>() - p, tri.c.cast<double>() - p};
+    const V touch = t * v - n;
+    bool inside = true;
+    for (int k = 0; k < 3 && inside; ++k)
+      inside = n.dot((corners[(k + 1) % 3] - corners[k]).cross(touch - corners[k])) >= 0;
+    if (inside) {
+      best = {float(t), tri.normal};
+      return kSettled;
     }
   }
+  return t;
+}
+
+void edgeImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best) {
+  using V = Eigen::Vector3d;
+  const V p = pf.cast<double>(), v = vf.cast<double>();
+  const V corners[3] = {tri.a.cast<double>() - p, tri.b.cast<double>() - p,
+                        tri.c.cast<double>() - p};  // relative to the start
   for (int k = 0; k < 3; ++k) {
     // Edge k: the infinite cylinder of radius 1 around it, then the segment.
     const V& e0 = corners[k];
@@ -105,25 +124,50 @@ Triangle sphereSpaceTriangle(const World& world, std::uint32_t t, const Vec3& to
   return out;
 }
 
-ExactCandidate makeExactCandidate(const World& world, const CandidateTriangle& c,
-                                  EllipsoidRadii radii, const Vec3& toSphere) {
-  const schema::Plane& face = world.trianglePlanes()[c.triangle].face();
+FaceTest exactFaceTest(const World& world, std::uint32_t triangle, EllipsoidRadii radii) {
+  const schema::Plane& face = world.trianglePlanes()[triangle].face();
   const Vec3 normal = toVec3(face.normal());
   // The reach is padded so float rounding in the pre-check never drops a
   // triangle the sphere touches.
-  return {c.low, c.high, c.triangle,
-          FaceTest{normal, face.distance(), effectiveRadius(normal, radii) * 1.0001f + 1e-5f},
-          sphereSpaceTriangle(world, c.triangle, toSphere)};
+  return {normal, face.distance(), effectiveRadius(normal, radii) * 1.0001f + 1e-5f};
 }
 
 }  // namespace detail
 
 namespace {
 
-using detail::earliestImpact;
+using detail::edgeImpact;
+using detail::faceImpact;
 using detail::Impact;
 using detail::sphereSpaceTriangle;
 using detail::Triangle;
+
+// The exact sweep's candidates: LocalCandidates with each triangle scaled
+// into sphere space on first use (most candidates never pass the box test
+// and the pre-check).
+template <typename Make>
+class ExactCandidates : public LocalCandidates<detail::ExactCold, Make> {
+ public:
+  ExactCandidates(const World& world, const Vec3& toSphere, detail::StepWorkspace& workspace,
+                  Make make)
+      : LocalCandidates<detail::ExactCold, Make>(detail::activeExact(workspace), workspace.listed,
+                                                 workspace.sorted, make),
+        world_(world),
+        toSphere_(toSphere) {}
+
+  const Triangle& sphere(std::uint32_t slot) {
+    detail::ExactCold& cold = (*this)[slot];
+    if (!cold.ready) {
+      cold.sphere = sphereSpaceTriangle(world_, cold.triangle, toSphere_);
+      cold.ready = true;
+    }
+    return cold.sphere;
+  }
+
+ private:
+  const World& world_;
+  Vec3 toSphere_;
+};
 
 // The world-space unit normal of a sphere-space normal: normals scale by the
 // inverse of the position scale, so by (1/rxz, 1/ry, 1/rxz) again.
@@ -150,18 +194,19 @@ void recoverFromPenetration(const World& world, Vec3& p, const Vec3& toSphere, f
     const Vec3 centre = p.cwiseQuotient(toSphere);
     const Bounds here = sweptBounds(centre, centre, radii);
     bool pushed = false;
-    for (const std::uint32_t index : local.around(world, here, moveLength, radii, scratch)) {
-      const detail::ExactCandidate& candidate = local[index];
-      if (!boxesOverlap(candidate.low, candidate.high, here.low, here.high)) continue;
-      const Triangle& tri = candidate.sphere;
-      if (tri.normal.dot(p - tri.a) < 0) continue;
-      const Vec3 offset = p - closestPointOnTriangle<Vec3>(p, tri.a, tri.b, tri.c);
-      const float distance = offset.norm();
-      if (distance >= 1) continue;  // within the padding is not penetration
-      const Vec3 away = distance > 1e-6f ? Vec3(offset / distance) : tri.normal;
-      p += away * (1 + padding - distance);
-      pushed = true;
-      addContact(result, worldNormal(away, toSphere), walkableNormalY);
+    for (const detail::CandidateBlock& block :
+         local.around(world, here, moveLength, radii, scratch)) {
+      for (std::uint32_t bits = detail::boxMask(block, here); bits != 0; bits &= bits - 1) {
+        const Triangle& tri = local.sphere(block.slot[std::countr_zero(bits)]);
+        if (tri.normal.dot(p - tri.a) < 0) continue;
+        const Vec3 offset = p - closestPointOnTriangle<Vec3>(p, tri.a, tri.b, tri.c);
+        const float distance = offset.norm();
+        if (distance >= 1) continue;  // within the padding is not penetration
+        const Vec3 away = distance > 1e-6f ? Vec3(offset / distance) : tri.normal;
+        p += away * (1 + padding - distance);
+        pushed = true;
+        addContact(result, worldNormal(away, toSphere), walkableNormalY);
+      }
     }
     if (!pushed) return;
   }
@@ -184,9 +229,10 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
   bool recovered = false;
   const float moveLength = (desiredEnd - start).norm();
   detail::StepWorkspace& workspace = scratch.workspace();
-  LocalCandidates local(workspace.exact, workspace.listed, [&](const CandidateTriangle& c) {
-    return detail::makeExactCandidate(world, c, radii, toSphere);
+  ExactCandidates local(world, toSphere, workspace, [&](std::uint32_t triangle) {
+    return detail::exactFaceTest(world, triangle, radii);
   });
+  std::vector<std::pair<double, std::uint32_t>>& open = workspace.open;
   for (int iteration = 0;; ++iteration) {
     if (move.squaredNorm() < 1e-14f) break;
     const Vec3 from = p.cwiseQuotient(toSphere);
@@ -194,19 +240,24 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     const Bounds swept = sweptBounds(from, to, radii);
     Impact impact;
     bool penetrating = false;
-    for (const std::uint32_t index : local.around(world, swept, moveLength, radii, scratch)) {
-      const detail::ExactCandidate& candidate = local[index];
-      if (!boxesOverlap(candidate.low, candidate.high, swept.low, swept.high)) continue;
-      // The side-value pre-check on the stored face plane: a path that stays
-      // more than the body's extent in front of the plane, or starts behind
-      // it, cannot touch the triangle.
-      const detail::FaceTest& face = candidate.face;
-      const float startSide = face.normal.dot(from) - face.distance;
-      if (startSide < -1e-5f ||
-          std::min(startSide, face.normal.dot(to) - face.distance) > face.reach)
-        continue;
-      earliestImpact(candidate.sphere, p, move, impact, penetrating);
+    // The face stage for every candidate the box and the side-value
+    // pre-check keep (a path that stays more than the body's extent in
+    // front of the plane, or starts behind it, cannot touch the triangle),
+    // then the edge stage only for those whose face left them open and
+    // whose plane the sphere reaches before the earliest impact found so
+    // far: on the ground, one face settles the neighbouring triangles.
+    open.clear();
+    for (const detail::CandidateBlock& block :
+         local.around(world, swept, moveLength, radii, scratch)) {
+      for (std::uint32_t bits = detail::exactMask(block, swept, from, to); bits != 0;
+           bits &= bits - 1) {
+        const std::uint32_t slot = block.slot[std::countr_zero(bits)];
+        const double earliest = faceImpact(local.sphere(slot), p, move, impact, penetrating);
+        if (earliest < 1) open.push_back({earliest, slot});
+      }
     }
+    for (const auto& [earliest, slot] : open)
+      if (earliest < impact.time) edgeImpact(local.sphere(slot), p, move, impact);
     // A start in penetration (pushed there by another body, or placed there)
     // is first moved out, then the sweep is made again from there.
     if (penetrating && iteration == 0 && !recovered) {

@@ -57,6 +57,16 @@ struct Triangle {
 void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best,
                     bool& penetrating);
 
+// earliestImpact's first stage: a start behind the triangle (no impact),
+// within the unit distance of it (penetration), and a first touch inside the
+// face. Returns the time before which no edge or corner of the triangle can
+// be touched (its plane's), or infinity when none can improve on `best`.
+double faceImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best,
+                  bool& penetrating);
+
+// earliestImpact's second stage: the edges and corners.
+void edgeImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best);
+
 /// Triangle `t` of `world` scaled by `toSphere` into sphere space, with its
 /// unit normal.
 Triangle sphereSpaceTriangle(const World& world, std::uint32_t t, const Vec3& toSphere);

@@ -2,8 +2,8 @@
 // slide, with the defects fixed that docs/algorithm.md lists.
 #include <Eigen/LU>
 #include <algorithm>
+#include <bit>
 #include <cmath>
-#include <optional>
 
 #include "narrow_phase.h"
 #include "slide.h"
@@ -12,47 +12,59 @@ namespace bspf {
 
 namespace {
 
+// The blocking triangle findBlockingTriangle chose, with its face plane
+// (from the candidate's block: the blob's copy is likely out of cache).
+// A plain struct, not std::optional: the optional's flag, written as a byte
+// and read back as a word, stalled every scan on a failed store forward.
 struct Hit {
-  std::uint32_t triangle;
-  float facing;
+  static constexpr std::uint32_t kNone = ~std::uint32_t(0);
+  std::uint32_t triangle = kNone;
+  float facing = 0;
+  Vec3 normal = Vec3::Zero();
+  float distance = 0;
+  bool found() const { return triangle != kNone; }
 };
 
 // The triangle in the way of the move start -> end with the lowest facing
-// value, if any.
-std::optional<Hit> findBlockingTriangle(const World& world, const Vec3& start, const Vec3& end,
-                                        EllipsoidRadii radii, const Bounds& swept, auto& local,
-                                        std::span<const std::uint32_t> listed) {
+// value, if any (else !found()).
+Hit findBlockingTriangle(const World& world, const Vec3& start, const Vec3& end,
+                         EllipsoidRadii radii, const Bounds& swept, auto& local,
+                         std::span<const detail::CandidateBlock> blocks) {
   const Vec3 move = end - start;
   const float moveLength = move.norm();
   const Vec3 direction = moveLength > 0 ? Vec3(move / moveLength) : Vec3::Zero();
-  std::optional<Hit> best;
-  for (const std::uint32_t index : listed) {
-    detail::PlanesCandidate& candidate = local[index];
-    // The cheapest test first: the box, then the pre-check's two dot
-    // products, and only then the six planes.
-    if (!boxesOverlap(candidate.low, candidate.high, swept.low, swept.high)) continue;
-    const detail::FaceTest& face = candidate.face;
-    const float startSide = face.normal.dot(start) - face.distance;
-    const float endSide = face.normal.dot(end) - face.distance;
-    if (!detail::passesPreCheck({face.reach, startSide, endSide})) continue;
-    if (!candidate.grown.ready)
-      detail::growPlanes(world, candidate.triangle, radii, candidate.grown);
-    // Test the six planes where the centre crosses the offset plane (the
-    // article leaves this position unspecified: testing the end lets fast
-    // bodies skip small triangles). A body already within it is tested at
-    // its start and at its end.
-    bool inside;
-    if (startSide >= face.reach) {
-      const float f = (startSide - face.reach) / (startSide - endSide);
-      inside = candidate.grown.inside(start + f * move);
-    } else {
-      inside = candidate.grown.inside(start) || candidate.grown.inside(end);
+  Hit best;
+  for (const detail::CandidateBlock& block : blocks) {
+    // The cheap tests for the whole block at once (the box, then the
+    // pre-check's two dot products); the six planes only for the few
+    // lanes that pass.
+    for (std::uint32_t bits = detail::planesMask(block, swept, start, end); bits != 0;
+         bits &= bits - 1) {
+      const int lane = std::countr_zero(bits);
+      detail::PlanesCold& candidate = local[block.slot[lane]];
+      const Vec3 normal(block.normalX[lane], block.normalY[lane], block.normalZ[lane]);
+      const float reach = block.reach[lane];
+      const float startSide = normal.dot(start) - block.distance[lane];
+      const float endSide = normal.dot(end) - block.distance[lane];
+      if (!candidate.grown.ready)
+        detail::growPlanes(world, candidate.triangle, radii, candidate.grown);
+      // Test the six planes where the centre crosses the offset plane (the
+      // article leaves this position unspecified: testing the end lets fast
+      // bodies skip small triangles). A body already within it is tested at
+      // its start and at its end.
+      bool inside;
+      if (startSide >= reach) {
+        const float f = (startSide - reach) / (startSide - endSide);
+        inside = candidate.grown.inside(start + f * move);
+      } else {
+        inside = candidate.grown.inside(start) || candidate.grown.inside(end);
+      }
+      if (!inside) continue;
+      const float facing = normal.dot(direction);
+      const std::uint32_t t = candidate.triangle;
+      if (!best.found() || facing < best.facing || (facing == best.facing && t < best.triangle))
+        best = Hit{t, facing, normal, block.distance[lane]};
     }
-    if (!inside) continue;
-    const float facing = face.normal.dot(direction);
-    const std::uint32_t t = candidate.triangle;
-    if (!best || facing < best->facing || (facing == best->facing && t < best->triangle))
-      best = Hit{t, facing};
   }
   return best;
 }
@@ -103,16 +115,10 @@ bool meetConstraints(const std::array<const Constraint*, N>& set, float maxShift
 
 namespace detail {
 
-PlanesCandidate makePlanesCandidate(const World& world, const CandidateTriangle& c,
-                                    EllipsoidRadii radii) {
-  const schema::Plane& face = world.trianglePlanes()[c.triangle].face();
+FaceTest planesFaceTest(const World& world, std::uint32_t triangle, EllipsoidRadii radii) {
+  const schema::Plane& face = world.trianglePlanes()[triangle].face();
   const Vec3 normal = toVec3(face.normal());
-  PlanesCandidate out;
-  out.low = c.low;
-  out.high = c.high;
-  out.triangle = c.triangle;
-  out.face = {normal, face.distance(), effectiveRadius(normal, radii)};
-  return out;
+  return {normal, face.distance(), effectiveRadius(normal, radii)};
 }
 
 void growPlanes(const World& world, std::uint32_t triangle, EllipsoidRadii radii,
@@ -146,24 +152,22 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
   const float maxShift = (desiredEnd - start).norm() + std::max(radii.xz, radii.y);
   const float moveLength = (desiredEnd - start).norm();
   detail::StepWorkspace& workspace = scratch.workspace();
-  LocalCandidates local(workspace.planes, workspace.listed, [&](const CandidateTriangle& c) {
-    return detail::makePlanesCandidate(world, c, radii);
-  });
+  LocalCandidates local(
+      detail::activePlanes(workspace), workspace.listed, workspace.sorted,
+      [&](std::uint32_t triangle) { return detail::planesFaceTest(world, triangle, radii); });
   for (int iteration = 0;; ++iteration) {
     const Bounds swept = sweptBounds(start, result.end, radii);
-    const std::optional<Hit> hit =
-        findBlockingTriangle(world, start, result.end, radii, swept, local,
-                             local.around(world, swept, moveLength, radii, scratch));
-    if (!hit) return result;
+    const Hit hit = findBlockingTriangle(world, start, result.end, radii, swept, local,
+                                         local.around(world, swept, moveLength, radii, scratch));
+    if (!hit.found()) return result;
     if (iteration == settings.maxIterations) {
       result.refused = true;
       result.end = start;
       return result;
     }
-    const schema::Plane& face = world.trianglePlanes()[hit->triangle].face();
-    const Vec3 normal = toVec3(face.normal());
+    const Vec3& normal = hit.normal;
     const bool walkable = normal.y() >= walkableNormalY;
-    const Constraint added{normal, face.distance() + effectiveRadius(normal, radii) + settings.skin,
+    const Constraint added{normal, hit.distance + effectiveRadius(normal, radii) + settings.skin,
                            walkable ? Vec3::UnitY() : normal};
     result.end += added.push * (violation(added, result.end) / normal.dot(added.push));
 

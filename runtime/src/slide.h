@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <numbers>
 
@@ -47,60 +48,97 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
 inline float nearbyPad(float moveLength) { return 2.0f * moveLength + 0.1f; }
 
 /// The triangles one slide's iterations test: the body's nearby triangles
-/// (StepScratch::nearby), made into `Candidate`s for its radii once per tree
-/// query (kept with the body between frames, their tests precomputed), of
-/// which those whose box overlaps a local box around the slide are listed,
-/// by index, in a short list every iteration scans. Listed again only when
-/// an iteration's swept box leaves the local box (a slide moves the end by
-/// about the move's length at most).
-template <typename Candidate, typename Make>
+/// (StepScratch::nearby, or the body's cache in use), made into candidates for its radii once per
+/// tree query (kept with the body between frames, their tests precomputed), of which those whose
+/// box overlaps a local box around the slide are packed into a few CandidateBlocks every iteration
+/// scans (unless they are few already). Packed again only when an iteration's swept box leaves the
+/// local box (a slide moves the end by about the move's length at most).
+/// `Make(std::uint32_t triangle)` returns the triangle's FaceTest for the
+/// body; `Cold::reset(triangle)` prepares the rest.
+template <typename Cold, typename Make>
 class LocalCandidates {
  public:
-  LocalCandidates(detail::MadeCandidates<Candidate>& made, std::vector<std::uint32_t>& listed,
-                  Make make)
-      : made_(made), listed_(listed), make_(make) {}
+  LocalCandidates(detail::MadeCandidates<Cold>& made, std::vector<detail::CandidateBlock>& listed,
+                  std::vector<CandidateTriangle>& sorted, Make make)
+      : made_(made), listed_(listed), sorted_(sorted), make_(make) {}
 
-  /// Indices (for operator[]) of candidates whose box may overlap `swept`,
-  /// in triangle order (filter by `swept`: the list holds more).
-  /// `moveLength`, metres, sizes the local box and the tree query.
-  std::span<const std::uint32_t> around(const World& world, const Bounds& swept, float moveLength,
-                                        EllipsoidRadii radii, StepScratch& scratch) {
+  /// Blocks holding (at least) the candidates whose box may overlap
+  /// `swept`, in triangle order lane by lane (filter by `swept`: the blocks
+  /// hold more). `moveLength`, metres, sizes the local box and the tree
+  /// query.
+  std::span<const detail::CandidateBlock> around(const World& world, const Bounds& swept,
+                                                 float moveLength, EllipsoidRadii radii,
+                                                 StepScratch& scratch) {
     if (valid_ && (swept.low.array() >= local_.low.array()).all() &&
         (swept.high.array() <= local_.high.array()).all())
-      return listed_;
+      return current_;
     valid_ = true;
     const Vec3 grow = Vec3::Constant(0.05f * moveLength + kLocalGrowMetres);
     local_ = {swept.low - grow, swept.high + grow};
-    scratch.nearby.cover(world, local_.low, local_.high, nearbyPad(moveLength), scratch.sweep);
-    if (made_.query != scratch.nearby.queryId() || made_.radii.xz != radii.xz ||
-        made_.radii.y != radii.y) {
-      made_.list.clear();
-      for (const CandidateTriangle& c : scratch.nearby.list()) made_.list.push_back(make_(c));
-      // In triangle order, whatever order the query listed them in (which
-      // depends on the box it was made for): ties in the narrow phases then
-      // resolve the same with a fresh query as with a body's older one.
-      std::sort(made_.list.begin(), made_.list.end(),
-                [](const Candidate& a, const Candidate& b) { return a.triangle < b.triangle; });
-      made_.query = scratch.nearby.queryId();
-      made_.radii = radii;
+    NearbyTriangles& nearby = detail::activeNearby(scratch);
+    nearby.cover(world, local_.low, local_.high, nearbyPad(moveLength), scratch.sweep);
+    if (made_.query != nearby.queryId() || made_.radii.xz != radii.xz || made_.radii.y != radii.y)
+      remake(nearby, radii);
+    // A short list is scanned as it is: packing it would cost more than
+    // the lanes it saves. A long one (fast bodies, dense geometry) is
+    // packed down to the lanes whose box overlaps the local box, in order.
+    if (made_.blocks.size() <= kScanWholeBlocks) {
+      scratch.workspace().lastCount = made_.cold.size();
+      return current_ = made_.blocks;
     }
     listed_.clear();
-    for (std::uint32_t i = 0; i < made_.list.size(); ++i)
-      if (boxesOverlap(made_.list[i].low, made_.list[i].high, local_.low, local_.high))
-        listed_.push_back(i);
-    scratch.workspace().lastCount = listed_.size();
-    return listed_;
+    std::size_t count = 0;
+    for (const detail::CandidateBlock& block : made_.blocks) {
+      for (std::uint32_t bits = detail::boxMask(block, local_); bits != 0; bits &= bits - 1) {
+        const int lane = std::countr_zero(bits);
+        if (count % detail::kBlockLanes == 0) listed_.emplace_back();
+        detail::copyLane(block, lane, listed_.back(), int(count % detail::kBlockLanes));
+        ++count;
+      }
+    }
+    if (count % detail::kBlockLanes != 0)
+      detail::clearLanes(listed_.back(), int(count % detail::kBlockLanes));
+    scratch.workspace().lastCount = count;
+    return current_ = listed_;
   }
 
-  Candidate& operator[](std::uint32_t index) { return made_.list[index]; }
+  Cold& operator[](std::uint32_t slot) { return made_.cold[slot]; }
 
  private:
+  // Makes the candidates of the nearby triangles, in triangle order
+  // whatever order the query listed them in (which depends on the box it
+  // was made for): ties in the narrow phases then resolve the same with a
+  // fresh query as with a body's older one.
+  void remake(const NearbyTriangles& nearby, EllipsoidRadii radii) {
+    sorted_.assign(nearby.list().begin(), nearby.list().end());
+    std::sort(sorted_.begin(), sorted_.end(),
+              [](const CandidateTriangle& a, const CandidateTriangle& b) {
+                return a.triangle < b.triangle;
+              });
+    made_.blocks.resize((sorted_.size() + detail::kBlockLanes - 1) / detail::kBlockLanes);
+    made_.cold.resize(sorted_.size());
+    for (std::uint32_t slot = 0; slot < sorted_.size(); ++slot) {
+      const CandidateTriangle& c = sorted_[slot];
+      detail::setLane(made_.blocks[slot / detail::kBlockLanes], int(slot % detail::kBlockLanes),
+                      c.low, c.high, make_(c.triangle), slot);
+      made_.cold[slot].reset(c.triangle);
+    }
+    if (sorted_.size() % detail::kBlockLanes != 0)
+      detail::clearLanes(made_.blocks.back(), int(sorted_.size() % detail::kBlockLanes));
+    made_.query = nearby.queryId();
+    made_.radii = radii;
+  }
+
   static constexpr float kLocalGrowMetres = 0.02f;
-  detail::MadeCandidates<Candidate>& made_;
-  std::vector<std::uint32_t>& listed_;
+  static constexpr std::size_t kScanWholeBlocks = 3;
+  detail::MadeCandidates<Cold>& made_;
+  std::vector<detail::CandidateBlock>& listed_;
+  std::vector<CandidateTriangle>& sorted_;
   Make make_;
   Bounds local_;
   bool valid_ = false;
+  /// What the last call returned: made_.blocks or listed_.
+  std::span<const detail::CandidateBlock> current_;
 };
 
 /// The narrow phase `settings.method` names.

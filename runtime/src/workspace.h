@@ -5,11 +5,14 @@
 #pragma once
 
 #include <bspf/movement.h>
+#include <bspf/query.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "narrow_phase.h"
@@ -46,26 +49,107 @@ struct GrownTriangle {
 void growPlanes(const World& world, std::uint32_t triangle, EllipsoidRadii radii,
                 GrownTriangle& grown);
 
-/// A triangle as the planes method tests it for one body.
-struct PlanesCandidate {
-  Vec3 low, high;  ///< the triangle's box
+/// How many candidates a CandidateBlock holds.
+inline constexpr int kBlockLanes = 8;
+
+/// What every scan of a slide reads of its candidates, for kBlockLanes of
+/// them at once: their boxes and face planes, one array per coordinate.
+/// A scan reads these few cache lines and tests a whole block with a few
+/// SSE instructions (planesMask and the like); the rest of a candidate
+/// (Cold in MadeCandidates) is read only for the few that pass. Unused lanes have an empty box
+/// (low > high), which no box overlaps.
+struct alignas(32) CandidateBlock {
+  float lowX[kBlockLanes], lowY[kBlockLanes], lowZ[kBlockLanes];
+  float highX[kBlockLanes], highY[kBlockLanes], highZ[kBlockLanes];
+  float normalX[kBlockLanes], normalY[kBlockLanes], normalZ[kBlockLanes];
+  float distance[kBlockLanes], reach[kBlockLanes];
+  /// Index of the candidate in MadeCandidates::cold.
+  std::uint32_t slot[kBlockLanes];
+};
+
+/// Writes candidate `slot` (its box and face test) into lane `lane`.
+inline void setLane(CandidateBlock& block, int lane, const Vec3& low, const Vec3& high,
+                    const FaceTest& face, std::uint32_t slot) {
+  block.lowX[lane] = low.x(), block.lowY[lane] = low.y(), block.lowZ[lane] = low.z();
+  block.highX[lane] = high.x(), block.highY[lane] = high.y(), block.highZ[lane] = high.z();
+  block.normalX[lane] = face.normal.x(), block.normalY[lane] = face.normal.y();
+  block.normalZ[lane] = face.normal.z();
+  block.distance[lane] = face.distance, block.reach[lane] = face.reach;
+  block.slot[lane] = slot;
+}
+
+/// Copies lane `from` of `source` into lane `to` of `target`.
+inline void copyLane(const CandidateBlock& source, int from, CandidateBlock& target, int to) {
+  target.lowX[to] = source.lowX[from], target.lowY[to] = source.lowY[from];
+  target.lowZ[to] = source.lowZ[from], target.highX[to] = source.highX[from];
+  target.highY[to] = source.highY[from], target.highZ[to] = source.highZ[from];
+  target.normalX[to] = source.normalX[from], target.normalY[to] = source.normalY[from];
+  target.normalZ[to] = source.normalZ[from], target.distance[to] = source.distance[from];
+  target.reach[to] = source.reach[from], target.slot[to] = source.slot[from];
+}
+
+/// Empties lanes [from, kBlockLanes) of `block`.
+inline void clearLanes(CandidateBlock& block, int from) {
+  for (int lane = from; lane < kBlockLanes; ++lane) {
+    block.lowX[lane] = block.lowY[lane] = block.lowZ[lane] = 1;
+    block.highX[lane] = block.highY[lane] = block.highZ[lane] = -1;
+    block.normalX[lane] = block.normalY[lane] = block.normalZ[lane] = 0;
+    block.distance[lane] = block.reach[lane] = 0;
+    block.slot[lane] = 0;
+  }
+}
+
+/// Bit i set when lane i's box overlaps `box` (touching counts).
+std::uint32_t boxMask(const CandidateBlock& block, const Bounds& box);
+/// Bit i set when lane i's box overlaps `box` and it passes the planes
+/// method's pre-check (passesPreCheck) for the move start -> end.
+std::uint32_t planesMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
+                         const Vec3& end);
+/// Bit i set when lane i's box overlaps `box` and it passes the exact
+/// sweep's pre-check for the move start -> end: the path comes within reach
+/// of the plane, and starts at most 1e-5 m behind it.
+std::uint32_t exactMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
+                        const Vec3& end);
+/// The same three, a lane at a time: what the SSE versions above must
+/// match bit for bit (the tests compare them), and what runs on CPUs
+/// without SSE.
+std::uint32_t scalarBoxMask(const CandidateBlock& block, const Bounds& box);
+std::uint32_t scalarPlanesMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
+                               const Vec3& end);
+std::uint32_t scalarExactMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
+                              const Vec3& end);
+
+/// A triangle as the planes method tests it for one body, beyond its
+/// CandidateBlock lane.
+struct PlanesCold {
   std::uint32_t triangle;
-  FaceTest face;
   GrownTriangle grown;
+  /// Makes this triangle `t`'s, its planes not yet grown.
+  void reset(std::uint32_t t) {
+    triangle = t;
+    grown.ready = false;
+  }
 };
 
-/// A triangle as the exact sweep tests it for one body: in sphere space.
-struct ExactCandidate {
-  Vec3 low, high;  ///< the triangle's box, world space
+/// A triangle as the exact sweep tests it for one body, beyond its
+/// CandidateBlock lane: in sphere space, made on first use.
+struct ExactCold {
   std::uint32_t triangle;
-  FaceTest face;
+  bool ready = false;
   Triangle sphere;
+  /// Makes this triangle `t`'s, not yet in sphere space.
+  void reset(std::uint32_t t) {
+    triangle = t;
+    ready = false;
+  }
 };
 
-/// A body's nearby triangles made into one narrow phase's candidates.
-template <typename Candidate>
+/// A body's nearby triangles made into one narrow phase's candidates: in
+/// triangle order, lane by lane through `blocks`, and `cold[slot]`.
+template <typename Cold>
 struct MadeCandidates {
-  std::vector<Candidate> list;  ///< in triangle order
+  std::vector<CandidateBlock> blocks;
+  std::vector<Cold> cold;
   /// NearbyTriangles::queryId() of the query they were made from; 0: none.
   std::uint64_t query = 0;
   EllipsoidRadii radii{0, 0};  ///< they were made for
@@ -75,31 +159,51 @@ struct MadeCandidates {
 /// candidates made from it.
 struct BodyCache {
   NearbyTriangles nearby;
-  MadeCandidates<PlanesCandidate> planes;
-  MadeCandidates<ExactCandidate> exact;
+  MadeCandidates<PlanesCold> planes;
+  MadeCandidates<ExactCold> exact;
 };
 
 struct StepWorkspace {
-  /// The candidates of the body being stepped, made from StepScratch::nearby.
-  MadeCandidates<PlanesCandidate> planes;
-  MadeCandidates<ExactCandidate> exact;
-  /// The current slide's candidates, as indices into planes or exact.
-  std::vector<std::uint32_t> listed;
+  /// The candidates of a body stepped with the scratch's own cache (no
+  /// BodyCache in use), made from StepScratch::nearby.
+  MadeCandidates<PlanesCold> planes;
+  MadeCandidates<ExactCold> exact;
+  /// The body cache in use (swapBodyCache), or null for the scratch's own.
+  BodyCache* active = nullptr;
+  /// The current slide's candidates: the lanes of planes or exact whose box
+  /// overlaps the slide's local box, packed.
+  std::vector<CandidateBlock> listed;
+  /// The nearby triangles sorted by triangle, while making candidates.
+  std::vector<CandidateTriangle> sorted;
+  /// The exact sweep's candidates whose edges an iteration still tests:
+  /// (earliest time, slot).
+  std::vector<std::pair<double, std::uint32_t>> open;
   std::size_t lastCount = 0;
   /// Each body's cache, by index in the bodies stepBodies (or
-  /// stepBodiesAgainstLevel) steps: swapped in for the body's step, so each
-  /// body reuses its own query and candidates over frames.
+  /// stepBodiesAgainstLevel) steps, so each body reuses its own query and
+  /// candidates over frames.
   std::vector<BodyCache> bodies;
 };
 
-/// Swaps `cache` with the body cache in use in `scratch` (its nearby
-/// triangles and the candidates made from them): call once to step the
-/// body with its own cache, again to put it back.
+/// Makes `cache` the one the narrow phases use in `scratch` (its nearby
+/// triangles and the candidates made from them), in place of the scratch's
+/// own: call once to step a body with its own cache, again to go back. A
+/// pointer, not a swap of the containers: it runs twice per body per phase.
 inline void swapBodyCache(StepScratch& scratch, BodyCache& cache) {
   StepWorkspace& workspace = scratch.workspace();
-  std::swap(scratch.nearby, cache.nearby);
-  std::swap(workspace.planes, cache.planes);
-  std::swap(workspace.exact, cache.exact);
+  workspace.active = workspace.active == &cache ? nullptr : &cache;
+}
+
+/// The nearby triangles and the candidates the narrow phases use now.
+inline NearbyTriangles& activeNearby(StepScratch& scratch) {
+  StepWorkspace& workspace = scratch.workspace();
+  return workspace.active ? workspace.active->nearby : scratch.nearby;
+}
+inline MadeCandidates<PlanesCold>& activePlanes(StepWorkspace& workspace) {
+  return workspace.active ? workspace.active->planes : workspace.planes;
+}
+inline MadeCandidates<ExactCold>& activeExact(StepWorkspace& workspace) {
+  return workspace.active ? workspace.active->exact : workspace.exact;
 }
 
 /// pushBodiesApart with caches[i] as body i's cache. Precondition: caches
@@ -115,10 +219,9 @@ void stepRangeAgainstLevel(const World& world, std::span<Body> bodies, std::span
                            float dt, StepScratch& scratch, std::span<StepReport> reports,
                            std::span<BodyCache> caches);
 
-PlanesCandidate makePlanesCandidate(const World& world, const CandidateTriangle& c,
-                                    EllipsoidRadii radii);
-/// `toSphere`: (1/radii.xz, 1/radii.y, 1/radii.xz).
-ExactCandidate makeExactCandidate(const World& world, const CandidateTriangle& c,
-                                  EllipsoidRadii radii, const Vec3& toSphere);
+/// The planes method's pre-check values of triangle `triangle` for `radii`.
+FaceTest planesFaceTest(const World& world, std::uint32_t triangle, EllipsoidRadii radii);
+/// The exact sweep's: its reach padded for float rounding.
+FaceTest exactFaceTest(const World& world, std::uint32_t triangle, EllipsoidRadii radii);
 
 }  // namespace bspf::detail

@@ -1,0 +1,132 @@
+// The box test and the pre-checks of the narrow phases, a CandidateBlock at a
+// time (workspace.h): on x86-64, 4 lanes per SSE instruction (SSE2 is part of
+// the baseline every x86-64 CPU has, so no run-time dispatch is needed);
+// elsewhere, or with BSPF_SCALAR_MASKS defined, a plain loop that computes
+// the same bits with the same float operations in the same order. The tests
+// run both and compare them (tests/runtime/candidate_blocks_test.cpp).
+#include "workspace.h"
+
+#if (defined(__SSE2__) || defined(_M_X64) || defined(_M_AMD64)) && !defined(BSPF_SCALAR_MASKS)
+#include <emmintrin.h>
+#define BSPF_SSE_MASKS 1
+#endif
+
+namespace bspf::detail {
+
+namespace {
+
+enum class Check { Box, Planes, Exact };
+
+// The reference: one lane at a time.
+template <Check check>
+std::uint32_t scalarMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
+                         const Vec3& end) {
+  std::uint32_t bits = 0;
+  for (int i = 0; i < kBlockLanes; ++i) {
+    bool keep = block.lowX[i] <= box.high.x() && box.low.x() <= block.highX[i] &&
+                block.lowY[i] <= box.high.y() && box.low.y() <= block.highY[i] &&
+                block.lowZ[i] <= box.high.z() && box.low.z() <= block.highZ[i];
+    if constexpr (check != Check::Box) {
+      // The side values: signed distances of the start and end centres to
+      // the face plane, metres.
+      const float startSide = block.normalX[i] * start.x() + block.normalY[i] * start.y() +
+                              block.normalZ[i] * start.z() - block.distance[i];
+      const float endSide = block.normalX[i] * end.x() + block.normalY[i] * end.y() +
+                            block.normalZ[i] * end.z() - block.distance[i];
+      if constexpr (check == Check::Planes)
+        keep = keep && endSide < block.reach[i] && startSide >= 0;
+      else
+        keep = keep && startSide >= -1e-5f &&
+               (startSide <= block.reach[i] || endSide <= block.reach[i]);
+    }
+    bits |= std::uint32_t(keep) << i;
+  }
+  return bits;
+}
+
+#ifdef BSPF_SSE_MASKS
+// The same, 4 lanes at a time: each comparison gives a lane mask of all ones
+// or zeros; movemask packs the lanes' sign bits into the result.
+template <Check check>
+std::uint32_t sseMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
+                      const Vec3& end) {
+  const __m128 lx = _mm_set1_ps(box.low.x()), ly = _mm_set1_ps(box.low.y()),
+               lz = _mm_set1_ps(box.low.z());
+  const __m128 hx = _mm_set1_ps(box.high.x()), hy = _mm_set1_ps(box.high.y()),
+               hz = _mm_set1_ps(box.high.z());
+  std::uint32_t bits = 0;
+  for (int first = 0; first < kBlockLanes; first += 4) {
+    __m128 keep = _mm_and_ps(_mm_cmple_ps(_mm_load_ps(block.lowX + first), hx),
+                             _mm_cmple_ps(lx, _mm_load_ps(block.highX + first)));
+    keep = _mm_and_ps(keep, _mm_and_ps(_mm_cmple_ps(_mm_load_ps(block.lowY + first), hy),
+                                       _mm_cmple_ps(ly, _mm_load_ps(block.highY + first))));
+    keep = _mm_and_ps(keep, _mm_and_ps(_mm_cmple_ps(_mm_load_ps(block.lowZ + first), hz),
+                                       _mm_cmple_ps(lz, _mm_load_ps(block.highZ + first))));
+    if constexpr (check != Check::Box) {
+      const __m128 nx = _mm_load_ps(block.normalX + first), ny = _mm_load_ps(block.normalY + first),
+                   nz = _mm_load_ps(block.normalZ + first);
+      const __m128 distance = _mm_load_ps(block.distance + first);
+      const __m128 reach = _mm_load_ps(block.reach + first);
+      auto side = [&](const Vec3& p) {
+        const __m128 sum = _mm_add_ps(
+            _mm_add_ps(_mm_mul_ps(nx, _mm_set1_ps(p.x())), _mm_mul_ps(ny, _mm_set1_ps(p.y()))),
+            _mm_mul_ps(nz, _mm_set1_ps(p.z())));
+        return _mm_sub_ps(sum, distance);
+      };
+      const __m128 startSide = side(start), endSide = side(end);
+      if constexpr (check == Check::Planes) {
+        keep = _mm_and_ps(keep, _mm_and_ps(_mm_cmplt_ps(endSide, reach),
+                                           _mm_cmpge_ps(startSide, _mm_setzero_ps())));
+      } else {
+        const __m128 inReach =
+            _mm_or_ps(_mm_cmple_ps(startSide, reach), _mm_cmple_ps(endSide, reach));
+        keep = _mm_and_ps(keep, _mm_and_ps(_mm_cmpge_ps(startSide, _mm_set1_ps(-1e-5f)), inReach));
+      }
+    }
+    bits |= std::uint32_t(_mm_movemask_ps(keep)) << first;
+  }
+  return bits;
+}
+#endif
+
+template <Check check>
+std::uint32_t mask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
+                   const Vec3& end) {
+#ifdef BSPF_SSE_MASKS
+  return sseMask<check>(block, box, start, end);
+#else
+  return scalarMask<check>(block, box, start, end);
+#endif
+}
+
+}  // namespace
+
+std::uint32_t boxMask(const CandidateBlock& block, const Bounds& box) {
+  return mask<Check::Box>(block, box, Vec3::Zero(), Vec3::Zero());
+}
+
+std::uint32_t planesMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
+                         const Vec3& end) {
+  return mask<Check::Planes>(block, box, start, end);
+}
+
+std::uint32_t exactMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
+                        const Vec3& end) {
+  return mask<Check::Exact>(block, box, start, end);
+}
+
+std::uint32_t scalarBoxMask(const CandidateBlock& block, const Bounds& box) {
+  return scalarMask<Check::Box>(block, box, Vec3::Zero(), Vec3::Zero());
+}
+
+std::uint32_t scalarPlanesMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
+                               const Vec3& end) {
+  return scalarMask<Check::Planes>(block, box, start, end);
+}
+
+std::uint32_t scalarExactMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
+                              const Vec3& end) {
+  return scalarMask<Check::Exact>(block, box, start, end);
+}
+
+}  // namespace bspf::detail

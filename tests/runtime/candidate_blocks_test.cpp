@@ -1,0 +1,89 @@
+// The narrow phases' block tests (runtime/src/candidate_blocks.cpp, private):
+// the SSE masks the step uses must give the same bits as the one-lane-at-a-
+// time reference, and the reference must mean what the narrow phases need.
+#include <catch2/catch.hpp>
+#include <random>
+
+#include "workspace.h"
+
+using bspf::Bounds;
+using bspf::Vec3;
+using bspf::detail::CandidateBlock;
+using bspf::detail::FaceTest;
+
+namespace {
+
+Vec3 randomPoint(std::mt19937& rng, float range) {
+  std::uniform_real_distribution<float> u(-range, range);
+  return {u(rng), u(rng), u(rng)};
+}
+
+// A block of random candidates; some lanes left empty, some boxes sharing a
+// face with the query box (touching must count), some planes through the
+// start or end (side value exactly 0).
+CandidateBlock randomBlock(std::mt19937& rng, int used) {
+  CandidateBlock block;
+  for (int lane = 0; lane < used; ++lane) {
+    const Vec3 a = randomPoint(rng, 4), b = randomPoint(rng, 4);
+    const Vec3 normal = randomPoint(rng, 1).normalized();
+    const FaceTest face{normal, std::uniform_real_distribution<float>(-3, 3)(rng),
+                        std::uniform_real_distribution<float>(0, 1.5f)(rng)};
+    bspf::detail::setLane(block, lane, a.cwiseMin(b), a.cwiseMax(b), face, std::uint32_t(lane));
+  }
+  bspf::detail::clearLanes(block, used);
+  return block;
+}
+
+}  // namespace
+
+TEST_CASE("the SSE block masks give the same bits as the one-lane reference") {
+  std::mt19937 rng(7);
+  int boxHits = 0, planesHits = 0, exactHits = 0;
+  for (int round = 0; round < 20000; ++round) {
+    CandidateBlock block = randomBlock(rng, int(rng() % 9));
+    const Vec3 a = randomPoint(rng, 4), b = randomPoint(rng, 4);
+    Bounds box{a.cwiseMin(b), a.cwiseMax(b)};
+    if (round % 5 == 0) box.low.x() = block.highX[0];  // touching
+    const Vec3 start = randomPoint(rng, 4), end = randomPoint(rng, 4);
+    const std::uint32_t boxBits = bspf::detail::boxMask(block, box);
+    const std::uint32_t planesBits = bspf::detail::planesMask(block, box, start, end);
+    const std::uint32_t exactBits = bspf::detail::exactMask(block, box, start, end);
+    INFO("round " << round);
+    REQUIRE(boxBits == bspf::detail::scalarBoxMask(block, box));
+    REQUIRE(planesBits == bspf::detail::scalarPlanesMask(block, box, start, end));
+    REQUIRE(exactBits == bspf::detail::scalarExactMask(block, box, start, end));
+    REQUIRE((planesBits & ~boxBits) == 0);
+    REQUIRE((exactBits & ~boxBits) == 0);
+    boxHits += boxBits != 0;
+    planesHits += planesBits != 0;
+    exactHits += exactBits != 0;
+  }
+  // The cases exercise every outcome, not only empty masks.
+  CHECK(boxHits > 2000);
+  CHECK(planesHits > 500);
+  CHECK(exactHits > 500);
+}
+
+TEST_CASE("a block mask keeps exactly the lanes whose box and side values pass") {
+  CandidateBlock block;
+  const FaceTest floor{Vec3::UnitY(), 0.0f, 0.85f};  // the plane y = 0, reach 0.85 m
+  const Vec3 low(-1, 0, -1), high(1, 0, 1);
+  bspf::detail::setLane(block, 0, low, high, floor, 0);
+  bspf::detail::setLane(block, 1, low + Vec3(5, 0, 0), high + Vec3(5, 0, 0), floor, 1);  // far
+  bspf::detail::setLane(block, 2, low, high, {-Vec3::UnitY(), 0.0f, 0.85f}, 2);  // facing down
+  bspf::detail::clearLanes(block, 3);
+  const Bounds swept{Vec3(-0.5f, -0.1f, -0.5f), Vec3(0.5f, 1.8f, 0.5f)};
+  const Vec3 start(0, 0.9f, 0), end(0, 0.8f, 0);  // a body settling onto the floor
+
+  CHECK(bspf::detail::boxMask(block, swept) == 0b101u);
+  // Planes: the end within reach of the floor, the start in front of it;
+  // the downward-facing plane has the start behind it.
+  CHECK(bspf::detail::planesMask(block, swept, start, end) == 0b001u);
+  CHECK(bspf::detail::exactMask(block, swept, start, end) == 0b001u);
+  // Moving away, out of reach: the planes method needs the end within reach.
+  CHECK(bspf::detail::planesMask(block, swept, Vec3(0, 0.9f, 0), Vec3(0, 1.0f, 0)) == 0u);
+  // The exact sweep keeps a path that starts within reach.
+  CHECK(bspf::detail::exactMask(block, swept, Vec3(0, 0.8f, 0), Vec3(0, 1.0f, 0)) == 0b001u);
+  // A box merely touching the lane's box counts.
+  CHECK(bspf::detail::boxMask(block, {Vec3(1, 0, 1), Vec3(2, 1, 2)}) == 0b101u);
+}
