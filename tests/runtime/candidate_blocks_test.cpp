@@ -1,9 +1,15 @@
-// The narrow phases' block tests (runtime/src/candidate_blocks.cpp, private):
-// the SSE masks the step uses must give the same bits as the one-lane-at-a-
-// time reference, and the reference must mean what the narrow phases need.
+// The narrow phases' candidate lists (private: runtime/src/workspace.h,
+// candidate_blocks.cpp, slide.h): the SSE masks the step uses must give the
+// same bits as the one-lane-at-a-time reference, the reference must mean
+// what the narrow phases need, and a slide's list must hold every triangle
+// near each box it asks for.
+#include <bit>
 #include <catch2/catch.hpp>
 #include <random>
+#include <set>
 
+#include "slide.h"
+#include "support/test_support.h"
 #include "workspace.h"
 
 using bspf::Bounds;
@@ -86,4 +92,43 @@ TEST_CASE("a block mask keeps exactly the lanes whose box and side values pass")
   CHECK(bspf::detail::exactMask(block, swept, Vec3(0, 0.8f, 0), Vec3(0, 1.0f, 0)) == 0b001u);
   // A box merely touching the lane's box counts.
   CHECK(bspf::detail::boxMask(block, {Vec3(1, 0, 1), Vec3(2, 1, 2)}) == 0b101u);
+}
+
+TEST_CASE("a slide's candidate blocks hold every triangle near each box it asks for") {
+  // A row of 40 small boxes along x: far more triangles than one query lists.
+  bspc::Mesh mesh;
+  for (int i = 0; i < 40; ++i)
+    bspf::test::append(mesh, bspf::test::boxMesh({0.5 * i, 0, -0.1}, {0.5 * i + 0.2, 0.3, 0.1}));
+  const bspf::test::CompiledMesh level(mesh);
+  const bspf::World& world = level.world;
+  const bspf::EllipsoidRadii radii{0.45f, 0.85f};
+  bspf::StepScratch scratch;
+  bspf::detail::StepWorkspace& workspace = scratch.workspace();
+  bspf::LocalCandidates local(
+      bspf::detail::activePlanes(workspace), workspace.listed, workspace.sorted,
+      [&](std::uint32_t triangle) { return bspf::detail::planesFaceTest(world, triangle, radii); });
+  // A slide's iterations ask for boxes further and further along the row
+  // (as a long slide would), each outside the last one's local box.
+  for (float x : {0.0f, 0.3f, 2.0f, 9.0f, 15.5f}) {
+    const Vec3 from(x, 0.5f, 0), to(x + 0.2f, 0.45f, 0);
+    const Bounds swept = bspf::sweptBounds(from, to, radii);
+    std::set<std::uint32_t> listed;
+    for (const CandidateBlock& block : local.around(world, swept, 0.2f, radii, scratch))
+      for (std::uint32_t bits = bspf::detail::boxMask(block, swept); bits; bits &= bits - 1)
+        listed.insert(local[block.slot[std::countr_zero(bits)]].triangle);
+    // Brute force: every triangle whose box overlaps the swept box.
+    std::set<std::uint32_t> expected;
+    for (std::uint32_t t = 0; t < world.triangles().size(); ++t) {
+      const bspf::schema::Triangle& tri = world.triangles()[t];
+      Vec3 low = bspf::toVec3(world.vertices()[tri.v0()]), high = low;
+      for (const std::uint32_t v : {tri.v1(), tri.v2()}) {
+        low = low.cwiseMin(bspf::toVec3(world.vertices()[v]));
+        high = high.cwiseMax(bspf::toVec3(world.vertices()[v]));
+      }
+      if (bspf::boxesOverlap(low, high, swept.low, swept.high)) expected.insert(t);
+    }
+    INFO("swept box from x = " << x);
+    CHECK(!expected.empty());
+    for (const std::uint32_t t : expected) CHECK(listed.count(t) == 1);
+  }
 }
