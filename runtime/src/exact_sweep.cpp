@@ -64,7 +64,10 @@ double faceImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& b
       if (away.dot(v) < 0 && 0 < best.time) best = {0.0f, away.cast<float>()};
       return kSettled;
     }
-    return 0;  // within reach of the plane, not of the triangle: its edges may come first
+    // Within reach of the plane, not of the triangle: an edge or corner may
+    // be touched, but not before the centre has covered the gap.
+    const double gap = distance - 1, travel = v.norm();
+    return gap < travel ? gap / travel : kSettled;
   }
   // Outside the plane's reach, the sphere touches no point of the triangle
   // before it touches the plane, at distance 1: if it never does within the
@@ -243,9 +246,9 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     // The face stage for every candidate the box and the side-value
     // pre-check keep (a path that stays more than the body's extent in
     // front of the plane, or starts behind it, cannot touch the triangle),
-    // then the edge stage only for those whose face left them open and
-    // whose plane the sphere reaches before the earliest impact found so
-    // far: on the ground, one face settles the neighbouring triangles.
+    // then the edge stage only for those whose face stage left them open
+    // and could come before the earliest impact found so far: on the
+    // ground, the face under the body settles its neighbours.
     open.clear();
     for (const detail::CandidateBlock& block :
          local.around(world, swept, moveLength, radii, scratch)) {

@@ -59,8 +59,11 @@ void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact&
 
 // earliestImpact's first stage: a start behind the triangle (no impact),
 // within the unit distance of it (penetration), and a first touch inside the
-// face. Returns the time before which no edge or corner of the triangle can
-// be touched (its plane's), or infinity when none can improve on `best`.
+// face. Returns the time (fraction of the move) before which no edge or
+// corner of the triangle can be touched: its plane's, or, for a start within
+// reach of the plane but not of the triangle, the time to cover the gap;
+// infinity when no edge or corner can be touched within the move or improve
+// on `best`.
 double faceImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best,
                   bool& penetrating);
 

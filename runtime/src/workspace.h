@@ -175,8 +175,8 @@ struct StepWorkspace {
   std::vector<CandidateBlock> listed;
   /// The nearby triangles sorted by triangle, while making candidates.
   std::vector<CandidateTriangle> sorted;
-  /// The exact sweep's candidates whose edges an iteration still tests:
-  /// (earliest time, slot).
+  /// The exact sweep's candidates whose edges an iteration may still test:
+  /// (the earliest time their face stage allows, slot).
   std::vector<std::pair<double, std::uint32_t>> open;
   std::size_t lastCount = 0;
   /// Each body's cache, by index in the bodies stepBodies (or
