@@ -83,8 +83,10 @@ class LocalCandidates {
     if (made_.query != nearby.queryId() || made_.radii.xz != radii.xz || made_.radii.y != radii.y)
       remake(nearby, radii);
     // A short list is scanned as it is: packing it would cost more than
-    // the lanes it saves. A long one (fast bodies, dense geometry) is
-    // packed down to the lanes whose box overlaps the local box, in order.
+    // the lanes it saves (up to 6 blocks, 48 candidates: measured on
+    // walkers, 3 blocks took 1 to 4% more instructions per step, 5 and 8
+    // the same). A long one (fast bodies, dense geometry) is packed down to
+    // the lanes whose box overlaps the local box, in order.
     if (made_.blocks.size() <= kScanWholeBlocks) {
       scratch.workspace().lastCount = made_.cold.size();
       return current_ = made_.blocks;
@@ -133,7 +135,7 @@ class LocalCandidates {
   }
 
   static constexpr float kLocalGrowMetres = 0.02f;
-  static constexpr std::size_t kScanWholeBlocks = 3;
+  static constexpr std::size_t kScanWholeBlocks = 6;
   detail::MadeCandidates<Cold>& made_;
   std::vector<detail::CandidateBlock>& listed_;
   std::vector<CandidateTriangle>& sorted_;
