@@ -34,6 +34,25 @@ inline constexpr const char* kFileIdentifier = "BSPF";
 /// traversal stack, so queries never allocate for it.
 inline constexpr std::uint32_t kMaxTreeDepth = 64;
 
+/// The largest magnitude, metres, of any coordinate a blob may hold: vertex
+/// and bound components, leaf triangle boxes, and node split plane distances
+/// (up to twice it). 100 km, a level 200 km across: larger than any
+/// level a float position can serve, since beyond it floats are more than
+/// 7.8 mm apart, eight times the default skin. It also keeps the step's
+/// arithmetic far from float overflow: in a body's unit-sphere space
+/// (coordinates divided by a radius of at least kMinBodyRadius, movement.h)
+/// squared lengths stay under 1e17.
+inline constexpr float kMaxCoordinate = 1e5f;
+
+/// Whether a triangle with these float corners is one the step can use: its
+/// height (twice its area over its longest edge, computed in double) is at
+/// least 8 float steps (8 * 2^-23) of its largest corner coordinate
+/// magnitude, taken as at least 1 m. A thinner triangle, or one that repeats
+/// a corner, is a line to float precision: it has no usable normal. Real
+/// levels' thinnest triangles are about 23 steps high. bspc drops triangles
+/// that fail this as degenerate; the loader refuses blobs that hold one.
+bool isUsableTriangle(const schema::Vec3& a, const schema::Vec3& b, const schema::Vec3& c);
+
 /// Why a blob was refused. Each is a distinct failure a caller may react to.
 enum class LoadStatus {
   Ok,
@@ -50,7 +69,9 @@ enum class LoadStatus {
   /// verification failed, or a semantic check did (a missing vector, an index
   /// out of range, a node graph that is not a tree, a non-finite float, a
   /// normal not of unit length, a leaf entry's bounding box that does not
-  /// hold its triangle, units other than metres with Y up).
+  /// hold its triangle, units other than metres with Y up, a coordinate
+  /// beyond kMaxCoordinate, a degenerate triangle (isUsableTriangle), a
+  /// triangle plane that disagrees with the triangle's vertices).
   Malformed,
   /// The caller's bytes are not 8-byte aligned (a broken precondition of
   /// viewWorld that is reported rather than read misaligned).
