@@ -143,7 +143,22 @@ struct OpenResult {
 
 /// Maps `path` read-only and verifies it (FlatBuffers verifier, then semantic
 /// checks: see LoadStatus::Malformed). Cost: one pass over the blob, no copy of
-/// geometry. Never throws for bad bytes; returns a status instead.
+/// geometry. Never throws for bad bytes; returns a status instead. Never
+/// blocks: a FIFO, device or socket is refused (CannotOpen, "not a regular
+/// file") without waiting for a writer.
+///
+/// Contract: the file must not be modified in place while a World made from
+/// it (or any copy) is alive. The World reads the mapped pages of the file
+/// itself, verified once at open: a file truncated under it kills the
+/// process with SIGBUS on the next read, and bytes written into it change
+/// the level under the running game, unverified. Replace a level instead,
+/// the way bspc writes one: write the new file beside it and rename() it
+/// over the old path. The open World keeps the old file's pages (the old
+/// inode lives until its last mapping goes), and the next openWorld of the
+/// path sees the new level. Safe reload: open the new World, and swap it in
+/// only when the open succeeded (keep the old one otherwise); release the
+/// old World once no thread steps against it. Copying a level with `cp`
+/// onto an open path writes in place: copy to a temporary name, then `mv`.
 OpenResult openWorld(const std::filesystem::path& path);
 
 /// Verifies caller-owned bytes and views them in place. The bytes must stay
