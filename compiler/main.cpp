@@ -105,14 +105,11 @@ int main(int argc, char** argv) {
       std::cerr << "\r\033[K" << line << std::flush;
     };
 
+  // Ctrl-C or a kill during the compile removes the temporary files.
+  bspc::removeTemporariesOnSignal();
   try {
-    const bspc::CompileReport report = bspc::compileFile(input, output, settings);
+    const bspc::CompileReport report = bspc::compileFile(input, output, settings, statsJson);
     if (settings.progress) std::cerr << "\r\033[K";
-    if (!statsJson.empty()) {
-      const std::string json = bspc::toJson(report) + "\n";
-      bspc::writeFileAtomically(statsJson,
-                                {reinterpret_cast<const std::uint8_t*>(json.data()), json.size()});
-    }
     if (!quiet)
       std::cout << "bspc: wrote " << output << ": " << report.triangles << " triangles, "
                 << report.outputBytes << " bytes, " << report.tree.leaves << " leaves, depth "

@@ -1,8 +1,10 @@
 #include <bspc/clean.h>
+#include <bspf/world.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -76,6 +78,12 @@ std::array<std::uint32_t, 3> canonicalRotation(const std::array<std::uint32_t, 3
   return t;
 }
 
+std::string shortNumber(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
 }  // namespace
 
 Mesh cleanMesh(const Mesh& mesh, const CleanSettings& settings, CleanReport& report) {
@@ -92,6 +100,12 @@ Mesh cleanMesh(const Mesh& mesh, const CleanSettings& settings, CleanReport& rep
       if (!std::isfinite(c) || !std::isfinite(f))
         throw CompileError("vertex " + std::to_string(i) + " has a coordinate that is " +
                            (std::isfinite(c) ? "too large for a float" : "not finite"));
+      // The runtime refuses a blob beyond its bound; say so here, in the
+      // source's terms, rather than write a level no game can load.
+      if (std::abs(f) > bspf::kMaxCoordinate)
+        throw CompileError("vertex " + std::to_string(i) + " has a coordinate of " +
+                           shortNumber(c) + " m, beyond the runtime's bound of 1e5 m" +
+                           " (check --scale)");
       rounded[i][k] = f;
     }
   }
@@ -118,6 +132,16 @@ Mesh cleanMesh(const Mesh& mesh, const CleanSettings& settings, CleanReport& rep
         0.5 * (rounded[tri[1]] - rounded[tri[0]]).cross(rounded[tri[2]] - rounded[tri[0]]).norm();
     if (!(area > settings.minTriangleArea) || area == 0) {
       ++report.droppedZeroArea;
+      continue;
+    }
+    auto corner = [&](int k) {
+      const Eigen::Vector3d& v = rounded[tri[k]];
+      return bspf::schema::Vec3(float(v.x()), float(v.y()), float(v.z()));
+    };
+    // A line to float precision (the runtime would refuse the blob) is
+    // degenerate, however large its area.
+    if (!bspf::isUsableTriangle(corner(0), corner(1), corner(2))) {
+      ++report.droppedDegenerate;
       continue;
     }
     if (!seen.insert(canonicalRotation(tri)).second) {

@@ -5,6 +5,7 @@
 #include <bspc/write.h>
 
 #include <chrono>
+#include <optional>
 #include <sstream>
 #include <system_error>
 
@@ -31,11 +32,10 @@ void say(const CompileSettings& settings, std::string_view line) {
 }
 
 std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSettings& settings,
-                                             const std::string& sourceName,
-                                             CompileReport& report) {
+                                             const std::string& sourceName, CompileReport& report) {
   say(settings, "clean");
-  const Mesh clean = timed(report.seconds.clean,
-                           [&] { return cleanMesh(mesh, settings.clean, report.clean); });
+  const Mesh clean =
+      timed(report.seconds.clean, [&] { return cleanMesh(mesh, settings.clean, report.clean); });
   say(settings, "build tree");
   const BspTree tree = timed(report.seconds.buildTree,
                              [&] { return buildTree(clean, settings.tree, settings.progress); });
@@ -65,12 +65,35 @@ std::vector<std::uint8_t> compileMesh(const Mesh& mesh, const CompileSettings& s
   return compileCleanStages(mesh, settings, sourceName, report);
 }
 
-CompileReport compileFile(const std::filesystem::path& input, const std::filesystem::path& output,
-                          const CompileSettings& settings) {
-  validate(settings);
+namespace {
+
+// Whether two paths name the same file, or would once created.
+bool sameFile(const std::filesystem::path& a, const std::filesystem::path& b) {
   std::error_code error;
-  if (std::filesystem::equivalent(input, output, error))
+  if (std::filesystem::equivalent(a, b, error)) return true;
+  const auto left = std::filesystem::weakly_canonical(a, error);
+  if (error) return false;
+  const auto right = std::filesystem::weakly_canonical(b, error);
+  return !error && left == right;
+}
+
+}  // namespace
+
+CompileReport compileFile(const std::filesystem::path& input, const std::filesystem::path& output,
+                          const CompileSettings& settings, const std::filesystem::path& statsJson) {
+  validate(settings);
+  if (sameFile(input, output))
     throw CompileError(output.string() + ": the output would overwrite the input");
+  if (!statsJson.empty() && sameFile(statsJson, input))
+    throw CompileError(statsJson.string() + ": the stats file would overwrite the input");
+  if (!statsJson.empty() && sameFile(statsJson, output))
+    throw CompileError(statsJson.string() + ": the stats file would overwrite the output");
+  // Both temporaries first: a path that cannot be written fails before the
+  // compile, and an interrupted compile leaves files the signal handler
+  // (removeTemporariesOnSignal) knows of. All outputs are kept, or none.
+  PendingFile blobFile(output);
+  std::optional<PendingFile> statsFile;
+  if (!statsJson.empty()) statsFile.emplace(statsJson);
   CompileReport report;
   try {
     say(settings, "import");
@@ -78,12 +101,19 @@ CompileReport compileFile(const std::filesystem::path& input, const std::filesys
         timed(report.seconds.import, [&] { return importMesh(input, settings.import); });
     const std::vector<std::uint8_t> blob =
         compileCleanStages(mesh, settings, input.filename().string(), report);
-    timed(report.seconds.write, [&] { writeFileAtomically(output, blob); });
+    timed(report.seconds.write, [&] { blobFile.write(blob); });
   } catch (const CompileError& e) {
     const std::string what = e.what();
     if (what.rfind("cannot write ", 0) == 0) throw;  // already names the output
     throw CompileError(input.string() + ": " + what);
   }
+  if (statsFile) {
+    const std::string json = toJson(report) + "\n";
+    statsFile->write({reinterpret_cast<const std::uint8_t*>(json.data()), json.size()});
+    statsFile->commit();
+  }
+  // The blob last: a stats file that cannot be committed leaves no blob.
+  timed(report.seconds.write, [&] { blobFile.commit(); });
   return report;
 }
 

@@ -1,12 +1,18 @@
-#include <bspc/import.h>
-
-#include <assimp/Importer.hpp>
+#include <assimp/DefaultIOStream.h>
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <bspc/import.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
+#include <assimp/Importer.hpp>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <string_view>
 
 namespace bspc {
 
@@ -56,19 +62,65 @@ void appendNode(const aiScene& scene, const aiNode& node, const Eigen::Matrix4d&
     appendNode(scene, *node.mChildren[c], transform, out);
 }
 
+// assimp's file access, except that it opens only regular files for reading,
+// and checks the type on the open descriptor (opened non-blocking), so no
+// FIFO or device swapped in after a check can block it.
+class RegularFilesOnly : public Assimp::DefaultIOSystem {
+ public:
+  // assimp's own opens the file to see whether it exists.
+  bool Exists(const char* file) const override {
+    struct stat info {};
+    return ::stat(file, &info) == 0;
+  }
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    if (std::string_view(mode).find_first_of("wa+") != std::string_view::npos)
+      return Assimp::DefaultIOSystem::Open(file, mode);
+    const int fd = ::open(file, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) return nullptr;
+    struct stat info {};
+    if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode) ||
+        ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK) != 0) {
+      ::close(fd);
+      return nullptr;
+    }
+    FILE* stream = ::fdopen(fd, "rb");
+    if (!stream) {
+      ::close(fd);
+      return nullptr;
+    }
+    return new Stream(stream, file);
+  }
+
+ private:
+  struct Stream : Assimp::DefaultIOStream {
+    Stream(FILE* file, const std::string& name) : Assimp::DefaultIOStream(file, name) {}
+  };
+};
+
 }  // namespace
 
 Mesh importMesh(const std::filesystem::path& path, const ImportSettings& settings) {
   {
     // assimp's own message for a missing file is vague; say why plainly.
+    // The type first: opening a FIFO to read would wait for a writer.
+    struct stat info {};
+    if (::stat(path.c_str(), &info) != 0)
+      throw CompileError(std::string("cannot open: ") + std::strerror(errno));
+    if (S_ISDIR(info.st_mode)) throw CompileError("is a directory, not a mesh");
+    if (!S_ISREG(info.st_mode))
+      throw CompileError("is not a regular file (a FIFO, device or socket), not a mesh");
     std::ifstream probe(path, std::ios::binary);
     if (!probe) throw CompileError(std::string("cannot open: ") + std::strerror(errno));
-    if (std::filesystem::is_directory(path)) throw CompileError("is a directory, not a mesh");
   }
   Assimp::Importer importer;
-  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-  const aiScene* scene = importer.ReadFile(
-      path.string(), aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure);
+  // Files the scene names (an OBJ's material library, say) are opened the
+  // same way: a FIFO among them must not block the compile either.
+  importer.SetIOHandler(new RegularFilesOnly);
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
+                              aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  const aiScene* scene =
+      importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_SortByPType |
+                                           aiProcess_ValidateDataStructure);
   if (!scene || !scene->mRootNode) {
     std::string why = importer.GetErrorString();
     if (why.empty()) why = "unknown format or unreadable file";

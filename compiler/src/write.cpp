@@ -1,11 +1,16 @@
 #include <bspc/write.h>
 #include <bspf/world.h>
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
+#include <climits>
+#include <csignal>
 #include <cstring>
 #include <limits>
+#include <random>
 
 #ifndef BSPF_VERSION
 #define BSPF_VERSION "unknown"
@@ -80,33 +85,143 @@ std::vector<std::uint8_t> serializeWorld(const Mesh& mesh,
   return {fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()};
 }
 
-void writeFileAtomically(const std::filesystem::path& path, std::span<const std::uint8_t> bytes) {
-  const std::filesystem::path temporary =
-      path.parent_path() / ("." + path.filename().string() + ".tmp-" + std::to_string(::getpid()));
-  auto fail = [&](const std::string& why) {
-    ::unlink(temporary.c_str());
-    throw CompileError("cannot write " + path.string() + ": " + why);
-  };
-  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw CompileError("cannot write " + path.string() + ": " + std::strerror(errno));
+namespace {
+
+// The temporaries now on disk, for the signal handler: the only global state
+// here, fixed-size and lock-free, because a handler may run between any two
+// instructions and can use nothing that allocates or locks. A slot is
+// claimed (`claimed`), filled, then published (`ready`); the handler reads
+// only published slots.
+struct TemporarySlot {
+  std::atomic<bool> claimed{false};
+  std::atomic<bool> ready{false};
+  char path[PATH_MAX] = {};
+};
+constexpr int kTemporarySlots = 8;
+TemporarySlot temporarySlots[kTemporarySlots];
+static_assert(std::atomic<bool>::is_always_lock_free);
+
+int listTemporary(const std::string& path) {
+  if (path.size() >= PATH_MAX) return -1;
+  for (int i = 0; i < kTemporarySlots; ++i) {
+    bool expected = false;
+    if (!temporarySlots[i].claimed.compare_exchange_strong(expected, true)) continue;
+    std::memcpy(temporarySlots[i].path, path.c_str(), path.size() + 1);
+    temporarySlots[i].ready.store(true);
+    return i;
+  }
+  return -1;  // more files at once than slots: only signal cleanup is lost
+}
+
+void unlistTemporary(int slot) {
+  if (slot < 0) return;
+  temporarySlots[slot].ready.store(false);
+  temporarySlots[slot].claimed.store(false);
+}
+
+extern "C" void removeTemporariesAndDie(int signal) {
+  for (TemporarySlot& slot : temporarySlots)
+    if (slot.ready.load()) ::unlink(slot.path);
+  ::signal(signal, SIG_DFL);
+  ::raise(signal);
+}
+
+// 12 characters of 32 possible each from the system's random source: 60 bits
+// no other process can guess ahead of time.
+std::string randomSuffix() {
+  static constexpr char kAlphabet[] = "abcdefghijklmnopqrstuvwxyz234567";
+  std::random_device source;
+  std::string out;
+  for (int i = 0; i < 12; ++i) out += kAlphabet[source() % 32];
+  return out;
+}
+
+// Empty when `path` is absent or a regular file, else why bspc will not
+// replace it.
+std::string notReplaceable(const std::filesystem::path& path) {
+  struct stat info {};
+  if (::lstat(path.c_str(), &info) != 0) return errno == ENOENT ? "" : std::strerror(errno);
+  if (S_ISREG(info.st_mode)) return "";
+  if (S_ISDIR(info.st_mode)) return "is a directory";
+  if (S_ISLNK(info.st_mode))
+    return "is a symbolic link (bspc replaces only regular files: name its target)";
+  return "is not a regular file (a device, FIFO or socket): bspc replaces only regular files";
+}
+
+}  // namespace
+
+PendingFile::PendingFile(const std::filesystem::path& path) : path_(path) {
+  if (const std::string why = notReplaceable(path_); !why.empty())
+    throw CompileError("cannot write " + path_.string() + ": " + why);
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    temporary_ = path_.parent_path() / ("." + path_.filename().string() + ".tmp-" + randomSuffix());
+    // Listed before it exists, so a signal never leaves it unlisted.
+    slot_ = listTemporary(temporary_.string());
+    fd_ = ::open(temporary_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+    if (fd_ >= 0) return;
+    const int error = errno;
+    unlistTemporary(slot_);
+    slot_ = -1;
+    if (error != EEXIST)
+      throw CompileError("cannot write " + path_.string() + ": " + std::strerror(error));
+  }
+  throw CompileError("cannot write " + path_.string() + ": no unused temporary file name");
+}
+
+PendingFile::~PendingFile() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!temporary_.empty()) ::unlink(temporary_.c_str());
+  unlistTemporary(slot_);
+}
+
+void PendingFile::fail(const std::string& why) {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  ::unlink(temporary_.c_str());
+  temporary_.clear();
+  unlistTemporary(slot_);
+  slot_ = -1;
+  throw CompileError("cannot write " + path_.string() + ": " + why);
+}
+
+void PendingFile::write(std::span<const std::uint8_t> bytes) {
+  if (fd_ < 0) fail("already closed");
   std::size_t done = 0;
   while (done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const int error = errno;
-      ::close(fd);
-      fail(n < 0 ? std::strerror(error) : "short write");
-    }
+    if (n <= 0) fail(n < 0 ? std::strerror(errno) : "short write");
     done += static_cast<std::size_t>(n);
   }
-  if (::fsync(fd) != 0) {
-    const int error = errno;
-    ::close(fd);
-    fail(std::strerror(error));
-  }
+}
+
+void PendingFile::commit() {
+  if (fd_ < 0) fail("already closed");
+  if (::fsync(fd_) != 0) fail(std::strerror(errno));
+  const int fd = fd_;
+  fd_ = -1;
   if (::close(fd) != 0) fail(std::strerror(errno));
-  if (::rename(temporary.c_str(), path.c_str()) != 0) fail(std::strerror(errno));
+  // Again: something may have been put there during the compile.
+  if (const std::string why = notReplaceable(path_); !why.empty()) fail(why);
+  if (::rename(temporary_.c_str(), path_.c_str()) != 0) fail(std::strerror(errno));
+  temporary_.clear();
+  unlistTemporary(slot_);
+  slot_ = -1;
+}
+
+void writeFileAtomically(const std::filesystem::path& path, std::span<const std::uint8_t> bytes) {
+  PendingFile file(path);
+  file.write(bytes);
+  file.commit();
+}
+
+void removeTemporariesOnSignal() {
+  for (const int signal : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction action {};
+    action.sa_handler = removeTemporariesAndDie;
+    sigemptyset(&action.sa_mask);
+    ::sigaction(signal, &action, nullptr);
+  }
 }
 
 }  // namespace bspc

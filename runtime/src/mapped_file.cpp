@@ -17,7 +17,10 @@ alignas(8) const std::byte kNoBytes[8] = {};
 
 std::shared_ptr<MappedFile> MappedFile::open(const std::filesystem::path& path,
                                              std::string& error) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // Non-blocking: opening a FIFO to read would otherwise wait for a writer
+  // (forever, for a game loading a level). The type check below then
+  // refuses it; a regular file ignores the flag.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) {
     error = std::strerror(errno);
     return nullptr;

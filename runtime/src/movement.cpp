@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <optional>
+#include <vector>
 
 #include "slide.h"
 #include "velocity.h"
@@ -111,22 +113,68 @@ void tryStepUp(const World& world, const Body& body, const Vec3& start, const Ve
   slide = stepped;
 }
 
-[[maybe_unused]] bool settingsInRange(const Body& body) {
+// Every range movement.h gives, written so that NaN fails each test.
+bool settingsInRange(const Body& body) {
   const MovementSettings& s = body.settings;
-  return body.radii.xz > 0 && body.radii.y > 0 && s.gravity >= 0 && s.groundFriction >= 0 &&
-         s.airFriction >= 0 && s.maxHorizontalSpeed > 0 && s.walkableSlopeDegrees >= 0 &&
-         s.walkableSlopeDegrees <= 89 && s.maxIterations >= 1 && s.maxIterations <= 32 &&
-         s.restitution >= 0 && s.restitution <= 1 && s.skin > 0 && s.maxStepHeight >= 0 &&
-         s.maxStepHeight <= 2 * body.radii.y;
+  const bool finite = std::isfinite(s.gravity) && std::isfinite(s.groundFriction) &&
+                      std::isfinite(s.airFriction) && std::isfinite(s.maxHorizontalSpeed);
+  const bool knownMethod =
+      s.method == CollisionMethod::Planes || s.method == CollisionMethod::ExactSweep;
+  return finite && knownMethod && s.gravity >= 0 && s.groundFriction >= 0 && s.airFriction >= 0 &&
+         s.maxHorizontalSpeed > 0 && s.walkableSlopeDegrees >= 0 && s.walkableSlopeDegrees <= 89 &&
+         s.maxIterations >= 1 && s.maxIterations <= 32 && s.restitution >= 0 &&
+         s.restitution <= 1 && s.skin > 0 && s.skin < std::min(body.radii.xz, body.radii.y) &&
+         s.maxStepHeight >= 0 && s.maxStepHeight <= 2 * body.radii.y;
+}
+
+}  // namespace
+
+const char* toString(InvalidInput invalid) {
+  switch (invalid) {
+    case InvalidInput::None: return "none";
+    case InvalidInput::Position: return "position";
+    case InvalidInput::Velocity: return "velocity";
+    case InvalidInput::Force: return "force";
+    case InvalidInput::TimeStep: return "time step";
+    case InvalidInput::Radii: return "radii";
+    case InvalidInput::Settings: return "settings";
+    case InvalidInput::OutOfReach: return "out of reach";
+  }
+  return "unknown";
+}
+
+namespace {
+
+// The step's entry check (stepBody; stepBodies uses it to leave bodies out
+// of the body phase). The reach is bounded in double, so the check itself
+// cannot overflow: friction only slows the horizontal velocity and the cap
+// only limits it, so the desired end is within (|v| + (|force| + gravity)
+// dt) dt of the position.
+InvalidInput checkStepInputs(const Body& body, const Vec3& force, float dt) {
+  if (!body.position.allFinite()) return InvalidInput::Position;
+  if (!body.velocity.allFinite()) return InvalidInput::Velocity;
+  if (!force.allFinite()) return InvalidInput::Force;
+  if (!(dt > 0) || !std::isfinite(dt)) return InvalidInput::TimeStep;
+  for (const float r : {body.radii.xz, body.radii.y})
+    if (!(r >= kMinBodyRadius && r <= kMaxBodyRadius)) return InvalidInput::Radii;
+  if (!settingsInRange(body)) return InvalidInput::Settings;
+  const double speed = body.velocity.cast<double>().norm() +
+                       (force.cast<double>().norm() + body.settings.gravity) * dt;
+  const double reach = body.position.cast<double>().cwiseAbs().maxCoeff() + speed * dt;
+  if (!(reach <= kMaxBodyCoordinate)) return InvalidInput::OutOfReach;
+  return InvalidInput::None;
 }
 
 }  // namespace
 
 void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepScratch& scratch,
               StepReport* report) {
-  assert(dt > 0 && std::isfinite(dt));
-  assert(settingsInRange(body));
   if (report) *report = StepReport{};
+  if (const InvalidInput invalid = checkStepInputs(body, force, dt);
+      invalid != InvalidInput::None) {
+    if (report) report->invalidInput = invalid;
+    return;
+  }
 
   detail::futureVelocity(body, force, dt);
   const Vec3 start = body.position;
@@ -180,9 +228,57 @@ void stepRangeAgainstLevel(const World& world, std::span<Body> bodies, std::span
 
 }  // namespace detail
 
+namespace {
+
+// The bodies with valid inputs, by index, when some are invalid; nothing
+// when all are valid (the common case: nothing is allocated).
+std::optional<std::vector<std::uint32_t>> validBodiesIfAnyInvalid(std::span<const Body> bodies,
+                                                                  std::span<const Vec3> forces,
+                                                                  float dt) {
+  auto ok = [&](std::size_t i) {
+    return checkStepInputs(bodies[i], forces[i], dt) == InvalidInput::None;
+  };
+  std::size_t i = 0;
+  while (i < bodies.size() && ok(i)) ++i;
+  if (i == bodies.size()) return std::nullopt;
+  std::vector<std::uint32_t> valid;
+  valid.reserve(bodies.size());
+  for (std::uint32_t j = 0; j < i; ++j) valid.push_back(j);
+  for (++i; i < bodies.size(); ++i)
+    if (ok(i)) valid.push_back(std::uint32_t(i));
+  return valid;
+}
+
+// The body phase over the valid bodies only, on a copy of them (the body
+// grid would take an invalid body's NaN or huge radius into its cells).
+void pushValidBodiesApart(const World& world, std::span<Body> bodies,
+                          std::span<const std::uint32_t> valid, StepScratch& scratch,
+                          std::span<StepReport> reports) {
+  std::vector<Body> kept(valid.size());
+  std::vector<StepReport> keptReports(reports.empty() ? 0 : valid.size());
+  for (std::size_t j = 0; j < valid.size(); ++j) {
+    kept[j] = bodies[valid[j]];
+    if (!reports.empty()) keptReports[j] = reports[valid[j]];
+  }
+  scratch.bodyGrid.build(kept);
+  pushBodiesApart(world, scratch.bodyGrid, kept, 0, kept.size(), scratch, keptReports);
+  for (std::size_t j = 0; j < valid.size(); ++j) {
+    bodies[valid[j]] = kept[j];
+    if (!reports.empty()) reports[valid[j]] = keptReports[j];
+  }
+}
+
+}  // namespace
+
 void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3> forces, float dt,
                 StepScratch& scratch, std::span<StepReport> reports) {
+  assert(forces.size() == bodies.size());
+  const auto valid = validBodiesIfAnyInvalid(bodies, forces, dt);
   stepBodiesAgainstLevel(world, bodies, forces, dt, scratch, reports);
+  if (valid) {
+    pushValidBodiesApart(world, bodies, *valid, scratch, reports);
+    return;
+  }
   scratch.bodyGrid.build(bodies);
   pushBodiesApart(world, scratch.bodyGrid, bodies, 0, bodies.size(), scratch, reports);
 }
@@ -192,6 +288,7 @@ void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3
   assert(forces.size() == bodies.size());
   assert(reports.empty() || reports.size() == bodies.size());
   assert(scratches.size() >= std::size_t(pool.threadCount()));
+  const auto valid = validBodiesIfAnyInvalid(bodies, forces, dt);
   // Small ranges balance the threads (a body against a wall costs several
   // times one in the open); each range still holds enough work to hide the
   // hand-out.
@@ -208,6 +305,10 @@ void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3
                                       reports.empty() ? reports : reports.subspan(first, count),
                                       std::span(caches).subspan(first, count));
       });
+  if (valid) {
+    pushValidBodiesApart(world, bodies, *valid, scratches[0], reports);
+    return;
+  }
   BodyGrid& grid = scratches[0].bodyGrid;
   grid.build(bodies);
   pool.parallelFor(

@@ -1,5 +1,7 @@
 #include <bspf/world.h>
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -201,6 +203,86 @@ bool checkTree(const schema::World& w, Checker& check, std::uint32_t& depthOut) 
   return true;
 }
 
+Eigen::Vector3d toDouble(const schema::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+bool withinBound(const schema::Vec3& v) {
+  return std::abs(v.x()) <= kMaxCoordinate && std::abs(v.y()) <= kMaxCoordinate &&
+         std::abs(v.z()) <= kMaxCoordinate;
+}
+
+// The largest corner coordinate magnitude, metres, at least 1: the scale of
+// the triangle's float rounding.
+double roundingScale(const Eigen::Vector3d (&p)[3]) {
+  double scale = 1;
+  for (const Eigen::Vector3d& v : p) scale = std::max(scale, v.cwiseAbs().maxCoeff());
+  return scale;
+}
+
+// The seven stored planes against the ones the corners give (the
+// construction of docs/format.md, section 3.3): each normal within 1e-3 of
+// the corners' (the loader's tolerance for unit length), and each corner the
+// plane passes through within 1 mm plus 1e-6 of the rounding scale (bspc's
+// float rounding is under a tenth of that at any size up to kMaxCoordinate).
+// The planes method slides along these planes: planes of another triangle
+// would let bodies through this one or stop them in the open.
+const char* disagreeingPlane(const schema::TrianglePlanes& stored, const Eigen::Vector3d (&p)[3]) {
+  using V = Eigen::Vector3d;
+  const double tolerance = 1e-3 + 1e-6 * roundingScale(p);
+  auto agrees = [&](const schema::Plane& plane, const V& normal, const V* on0, const V* on1,
+                    const V* on2) {
+    const V n = toDouble(plane.normal());
+    if ((n - normal).norm() > 1e-3) return false;
+    for (const V* q : {on0, on1, on2})
+      if (q && std::abs(n.dot(*q) - plane.distance()) > tolerance) return false;
+    return true;
+  };
+  const V face = (p[1] - p[0]).cross(p[2] - p[0]).normalized();
+  if (!agrees(stored.face(), face, &p[0], &p[1], &p[2])) return "face";
+  V edge[3];
+  for (int k = 0; k < 3; ++k) edge[k] = face.cross(p[(k + 1) % 3] - p[k]).normalized();
+  for (int k = 0; k < 3; ++k) {
+    if (!agrees(*stored.edges()->Get(k), edge[k], &p[k], &p[(k + 1) % 3], nullptr)) return "edge";
+    if (!agrees(*stored.caps()->Get(k), -edge[(k + 1) % 3], &p[k], nullptr, nullptr)) return "cap";
+  }
+  return nullptr;
+}
+
+// What the step needs beyond a blob that is safe to read: coordinates within
+// kMaxCoordinate, usable triangles, and planes that match them.
+bool checkStepSafety(const schema::World& w, Checker& check) {
+  const auto* vertices = w.vertices();
+  for (flatbuffers::uoffset_t i = 0; i < vertices->size(); ++i)
+    if (!withinBound(*vertices->Get(i)))
+      return check.fail("vertex " + std::to_string(i) + " is beyond the coordinate bound (" +
+                        "1e5 m)");
+  if (!withinBound(*w.bounds_min()) || !withinBound(*w.bounds_max()))
+    return check.fail("bounds are beyond the coordinate bound (1e5 m)");
+  const auto* boxes = w.leaf_triangle_bounds();
+  for (flatbuffers::uoffset_t i = 0; i < boxes->size(); ++i)
+    if (!withinBound(boxes->Get(i)->min()) || !withinBound(boxes->Get(i)->max()))
+      return check.fail("the bounding box of leaf triangle entry " + std::to_string(i) +
+                        " is beyond the coordinate bound (1e5 m)");
+  const auto* nodes = w.nodes();
+  for (flatbuffers::uoffset_t i = 0; i < nodes->size(); ++i)
+    if (!(std::abs(nodes->Get(i)->split().distance()) <= 2 * kMaxCoordinate))
+      return check.fail("split plane of node " + std::to_string(i) +
+                        " is beyond the coordinate bound (1e5 m)");
+  const auto* triangles = w.triangles();
+  for (flatbuffers::uoffset_t i = 0; i < triangles->size(); ++i) {
+    const schema::Triangle& t = *triangles->Get(i);
+    const schema::Vec3 &a = *vertices->Get(t.v0()), &b = *vertices->Get(t.v1()),
+                       &c = *vertices->Get(t.v2());
+    if (!isUsableTriangle(a, b, c))
+      return check.fail("triangle " + std::to_string(i) +
+                        " is degenerate (its corners are on one line, to float precision)");
+    const Eigen::Vector3d p[3] = {toDouble(a), toDouble(b), toDouble(c)};
+    if (const char* which = disagreeingPlane(*w.triangle_planes()->Get(i), p))
+      return check.fail(std::string(which) + " plane of triangle " + std::to_string(i) +
+                        " disagrees with its vertices");
+  }
+  return true;
+}
+
 OpenResult refuse(LoadStatus status, const std::string& name, const std::string& why) {
   OpenResult r;
   r.status = status;
@@ -257,7 +339,8 @@ OpenResult verifyAndView(std::span<const std::byte> bytes, std::shared_ptr<const
   std::string why;
   Checker check(why);
   std::uint32_t depth = 0;
-  if (!checkGeometry(*table, check) || !checkTree(*table, check, depth))
+  if (!checkGeometry(*table, check) || !checkTree(*table, check, depth) ||
+      !checkStepSafety(*table, check))
     return refuse(LoadStatus::Malformed, name, "malformed: " + why);
 
   OpenResult r;
@@ -267,6 +350,18 @@ OpenResult verifyAndView(std::span<const std::byte> bytes, std::shared_ptr<const
 }
 
 }  // namespace
+
+bool isUsableTriangle(const schema::Vec3& a, const schema::Vec3& b, const schema::Vec3& c) {
+  const Eigen::Vector3d p[3] = {toDouble(a), toDouble(b), toDouble(c)};
+  const double longest2 = std::max(
+      {(p[1] - p[0]).squaredNorm(), (p[2] - p[1]).squaredNorm(), (p[0] - p[2]).squaredNorm()});
+  if (!(longest2 > 0)) return false;
+  // Float corners differ by exact doubles, whose cross product is exact
+  // enough: the height is the triangle's own, not rounding's.
+  const double height = (p[1] - p[0]).cross(p[2] - p[0]).norm() / std::sqrt(longest2);
+  constexpr double kFloatStep = 1.0 / (1 << 23);
+  return height >= 8 * kFloatStep * roundingScale(p);
+}
 
 OpenResult openWorld(const std::filesystem::path& path) {
   std::string error;

@@ -3,6 +3,7 @@
 #include <bspc/clean.h>
 #include <bspc/mesh.h>
 #include <bspc/settings.h>
+#include <bspf/world.h>
 
 #include <array>
 #include <catch2/catch.hpp>
@@ -288,13 +289,39 @@ TEST_CASE("a non-finite coordinate is a CompileError", "[compiler][clean]") {
   }
 }
 
-TEST_CASE("the largest finite float coordinates are accepted", "[compiler][clean]") {
-  const double big = 3.0e38;  // below FLT_MAX
-  const bspc::Mesh mesh = meshOf({{0, 0, 0}, {big, 0, 0}, {0, big, 0}}, {{0, 1, 2}});
+TEST_CASE("coordinates up to the runtime's bound are accepted", "[compiler][clean]") {
+  const double big = bspf::kMaxCoordinate;
+  const bspc::Mesh mesh = meshOf({{0, 0, 0}, {big, 0, 0}, {0, -big, 0}}, {{0, 1, 2}});
   bspc::CleanReport report;
   bspc::Mesh clean;
   CHECK_NOTHROW(clean = bspc::cleanMesh(mesh, {}, report));
   CHECK(clean.triangles.size() == 1);
+}
+
+TEST_CASE("a finite coordinate beyond the runtime's bound is a CompileError naming the vertex",
+          "[compiler][clean]") {
+  // 1e19 m and 3e38 m are finite floats; the step's arithmetic on them is not.
+  for (const double big : {1.000001e5, 1e19, 3.0e38}) {
+    INFO(big);
+    const bspc::Mesh mesh =
+        meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {big, 0, 0}}, {{0, 1, 2}, {0, 3, 2}});
+    bspc::CleanReport report;
+    CHECK_THROWS_WITH(bspc::cleanMesh(mesh, {}, report),
+                      Catch::Contains("vertex 3") && Catch::Contains("bound"));
+  }
+}
+
+TEST_CASE("a triangle that is a line to float precision is dropped as degenerate",
+          "[compiler][clean]") {
+  // Area 0.05 m^2, far above the default minimum, but its 0.1 mm height is
+  // under two float steps at 1000 m: no usable normal.
+  const bspc::Mesh mesh = meshOf({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1000, 0, 0}, {500, 1e-4, 0}},
+                                 {{0, 1, 2}, {0, 3, 4}});
+  bspc::CleanReport report;
+  const bspc::Mesh clean = bspc::cleanMesh(mesh, {}, report);
+  CHECK(clean.triangles.size() == 1);
+  CHECK(report.droppedDegenerate == 1);
+  CHECK(report.droppedZeroArea == 0);
 }
 
 TEST_CASE("a vertex index out of range is a CompileError", "[compiler][clean]") {

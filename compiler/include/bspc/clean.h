@@ -13,7 +13,8 @@ struct CleanReport {
   std::uint32_t inputTriangles = 0;
   /// Vertices merged into an earlier one within the weld tolerance.
   std::uint32_t weldedVertices = 0;
-  /// Triangles whose corners collapsed to fewer than three vertices.
+  /// Triangles whose corners collapsed to fewer than three vertices, or that
+  /// are a line to float precision (not bspf::isUsableTriangle).
   std::uint32_t droppedDegenerate = 0;
   /// Triangles below the minimum area (collinear corners, needles).
   std::uint32_t droppedZeroArea = 0;
@@ -29,8 +30,8 @@ struct CleanReport {
 /// the tolerance (deterministically: each joins the first earlier vertex in
 /// reach), drops degenerate, zero-area and duplicate triangles and unused
 /// vertices, and keeps the order of what remains. Throws CompileError when a
-/// coordinate is not finite as a float, an index is out of range, or no
-/// triangle remains.
+/// coordinate is not finite as a float or beyond bspf::kMaxCoordinate, an
+/// index is out of range, or no triangle remains.
 Mesh cleanMesh(const Mesh& mesh, const CleanSettings& settings, CleanReport& report);
 
 }  // namespace bspc

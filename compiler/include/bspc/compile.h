@@ -28,10 +28,17 @@ struct CompileReport {
 };
 
 /// import, clean, build tree, precompute planes, write: `input` (any format
-/// assimp reads) to the blob at `output`. Throws CompileError with a one-line
-/// message naming the file at fault; `output` is then left as it was.
+/// assimp reads, a regular file) to the blob at `output`, and, when
+/// `statsJson` is not empty, the report as JSON (toJson) to that file. Both
+/// outputs are written through PendingFile (write.h): their temporaries are
+/// made before the import, and both are kept or neither (the stats file is
+/// renamed into place first, the blob last). Throws CompileError with a
+/// one-line message naming the file at fault (an output that is not a
+/// regular file, a stats path naming the input or the output, ...); the
+/// outputs are then left as they were.
 CompileReport compileFile(const std::filesystem::path& input, const std::filesystem::path& output,
-                          const CompileSettings& settings);
+                          const CompileSettings& settings,
+                          const std::filesystem::path& statsJson = {});
 
 /// The same stages on a mesh in memory (metres, Y up), returning the blob.
 /// `sourceName` is recorded as the source file name.

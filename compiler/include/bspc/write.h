@@ -28,9 +28,53 @@ std::vector<std::uint8_t> serializeWorld(const Mesh& mesh,
                                          const std::vector<bspf::schema::TrianglePlanes>& planes,
                                          const BspTree& tree, const BlobMetadata& metadata);
 
-/// Writes `bytes` to a temporary file beside `path`, flushes it to disk and
-/// renames it over `path`, so `path` is either untouched or complete. Throws
-/// CompileError naming `path` on failure, leaving no temporary file.
+/// An output file being written: bytes go to a temporary file beside `path`
+/// (".NAME.tmp-" and 12 random characters, created with O_EXCL and
+/// O_NOFOLLOW, so it never opens an existing file or follows a planted
+/// link), which commit() flushes to disk and renames over `path`. Until
+/// then `path` is untouched; a PendingFile destroyed uncommitted removes its
+/// temporary. While it exists its temporary is listed for the handler of
+/// removeTemporariesOnSignal.
+class PendingFile {
+ public:
+  /// Creates the temporary. Throws CompileError naming `path` when `path`
+  /// exists and is not a regular file (a device node, FIFO, socket,
+  /// directory or symbolic link: bspc replaces only regular files) or the
+  /// temporary cannot be made (a missing or read-only directory).
+  explicit PendingFile(const std::filesystem::path& path);
+  ~PendingFile();
+  PendingFile(const PendingFile&) = delete;
+  PendingFile& operator=(const PendingFile&) = delete;
+
+  /// Appends `bytes`. Throws CompileError naming `path` on failure.
+  void write(std::span<const std::uint8_t> bytes);
+  /// Flushes the temporary to disk and renames it over `path` (checked again
+  /// to be absent or a regular file). Throws CompileError naming `path` on
+  /// failure, removing the temporary. Call once.
+  void commit();
+
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  [[noreturn]] void fail(const std::string& why);
+  std::filesystem::path path_;
+  std::filesystem::path temporary_;
+  int fd_ = -1;
+  int slot_ = -1;  // in the signal handler's list
+};
+
+/// Writes `bytes` through a PendingFile: `path` is either untouched or
+/// complete. Throws CompileError naming `path` on failure, leaving no
+/// temporary file.
 void writeFileAtomically(const std::filesystem::path& path, std::span<const std::uint8_t> bytes);
+
+/// Installs handlers for SIGINT, SIGTERM and SIGHUP that remove every
+/// PendingFile's temporary, then end the process by the same signal (so the
+/// caller's shell sees it). For programs (bspc's main); a library caller that
+/// has its own handlers leaves them be. The handler reads the one piece of
+/// global state in bspc's library: a fixed table of the temporaries now on
+/// disk, each entry published by an atomic flag, as a signal handler can
+/// safely use nothing else.
+void removeTemporariesOnSignal();
 
 }  // namespace bspc

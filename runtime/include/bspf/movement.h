@@ -100,6 +100,43 @@ struct MovementSettings {
   float maxStepHeight = 0.0f;
 };
 
+/// The smallest and the largest body radius, metres, the step accepts. Below
+/// 1 mm a body is smaller than float positions resolve across a level, and
+/// the step's unit-sphere space (coordinates divided by the radius) would
+/// come near float overflow at the far edge of a level; above 1 km the
+/// body's extent squared would.
+inline constexpr float kMinBodyRadius = 1e-3f;
+inline constexpr float kMaxBodyRadius = 1e3f;
+/// The farthest, metres along any axis from the origin, that a body may be,
+/// or that its step may carry it (|position| + (|velocity| + (|force| +
+/// gravity) * dt) * dt, the bound on the step's desired end). Ten times
+/// kMaxCoordinate: a body that fell out of a level keeps falling for about
+/// 7 minutes before it reaches it.
+inline constexpr float kMaxBodyCoordinate = 1e6f;
+
+/// Why a step left a body as it was (StepReport::invalidInput). The step
+/// checks its inputs on every call, in every build: a body with bad values
+/// is not moved, rather than spreading NaN to the level phase's results and
+/// through the body phase to other bodies.
+enum class InvalidInput : std::uint8_t {
+  None,      ///< the inputs are valid; the body was stepped
+  Position,  ///< a component of the position is NaN or infinite
+  Velocity,  ///< a component of the velocity is NaN or infinite
+  Force,     ///< a component of the force is NaN or infinite
+  TimeStep,  ///< dt is NaN, infinite, zero or negative
+  Radii,     ///< a radius is NaN or outside [kMinBodyRadius, kMaxBodyRadius]
+  /// A MovementSettings field is NaN, infinite, or outside the range its
+  /// comment gives (maxIterations of -1 or 10^9, say), or skin is not
+  /// below both radii.
+  Settings,
+  /// The position, or the end this step could reach, is beyond
+  /// kMaxBodyCoordinate.
+  OutOfReach,
+};
+
+/// A short, stable name ("none", "position", "time step", ...).
+const char* toString(InvalidInput invalid);
+
 /// A moving ellipsoid. Position and velocity are the body's state; the step
 /// reads and writes them. `grounded` is the ground state after the last step.
 struct Body {
@@ -129,6 +166,11 @@ struct StepReport {
   std::array<Vec3, kMaxReportedContacts> contactNormals;
   /// Bodies this body was pushed apart from (stepBodies only).
   int bodyContacts = 0;
+  /// Not None when the inputs were invalid (see InvalidInput): the body was
+  /// not moved (position, velocity and ground state are as they were, the
+  /// other fields are zero), and stepBodies leaves it out of the body phase:
+  /// it neither pushes nor is pushed, and no other body sees it.
+  InvalidInput invalidInput = InvalidInput::None;
 };
 
 class StepScratch;
@@ -252,7 +294,11 @@ class StepScratch {
 
 /// Advances one body by `dt` seconds against the level. `force` is the input
 /// acceleration, m/s^2; only its x and z count (input acts in the xz plane).
-/// Preconditions (asserted): dt > 0 and finite, radii > 0, settings in range.
+/// Checks its inputs first, in every build: a body with a NaN or infinite
+/// position, velocity or force, a bad dt, radii outside [kMinBodyRadius,
+/// kMaxBodyRadius], settings out of range, or beyond kMaxBodyCoordinate is
+/// not moved, and `report` says why (StepReport::invalidInput). From valid
+/// inputs on a verified World the position and velocity stay finite.
 /// Never leaves the body inside the level's offset surfaces if it started
 /// outside them; a refused move leaves the position unchanged.
 void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepScratch& scratch,
@@ -280,6 +326,10 @@ void stepBodiesAgainstLevel(const World& world, std::span<Body> bodies,
 /// kMaxBodyCandidates): the cost is linear in the number of bodies, even
 /// when they pile up at one point.
 /// `forces` is parallel to `bodies`; `reports` is empty or parallel too.
+/// A body with invalid inputs (StepReport::invalidInput) is not moved and
+/// is left out of the body phase: the others are pushed as if it were not
+/// there (in a frame with such a body, the body phase runs on a copy of the
+/// valid bodies, in their order, on the calling thread).
 /// Thread safety: the World is only read; runs on the calling thread.
 void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3> forces, float dt,
                 StepScratch& scratch, std::span<StepReport> reports = {});

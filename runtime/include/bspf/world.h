@@ -34,6 +34,25 @@ inline constexpr const char* kFileIdentifier = "BSPF";
 /// traversal stack, so queries never allocate for it.
 inline constexpr std::uint32_t kMaxTreeDepth = 64;
 
+/// The largest magnitude, metres, of any coordinate a blob may hold: vertex
+/// and bound components, leaf triangle boxes, and node split plane distances
+/// (up to twice it). 100 km, a level 200 km across: larger than any
+/// level a float position can serve, since beyond it floats are more than
+/// 7.8 mm apart, eight times the default skin. It also keeps the step's
+/// arithmetic far from float overflow: in a body's unit-sphere space
+/// (coordinates divided by a radius of at least kMinBodyRadius, movement.h)
+/// squared lengths stay under 1e17.
+inline constexpr float kMaxCoordinate = 1e5f;
+
+/// Whether a triangle with these float corners is one the step can use: its
+/// height (twice its area over its longest edge, computed in double) is at
+/// least 8 float steps (8 * 2^-23) of its largest corner coordinate
+/// magnitude, taken as at least 1 m. A thinner triangle, or one that repeats
+/// a corner, is a line to float precision: it has no usable normal. Real
+/// levels' thinnest triangles are about 23 steps high. bspc drops triangles
+/// that fail this as degenerate; the loader refuses blobs that hold one.
+bool isUsableTriangle(const schema::Vec3& a, const schema::Vec3& b, const schema::Vec3& c);
+
 /// Why a blob was refused. Each is a distinct failure a caller may react to.
 enum class LoadStatus {
   Ok,
@@ -50,7 +69,9 @@ enum class LoadStatus {
   /// verification failed, or a semantic check did (a missing vector, an index
   /// out of range, a node graph that is not a tree, a non-finite float, a
   /// normal not of unit length, a leaf entry's bounding box that does not
-  /// hold its triangle, units other than metres with Y up).
+  /// hold its triangle, units other than metres with Y up, a coordinate
+  /// beyond kMaxCoordinate, a degenerate triangle (isUsableTriangle), a
+  /// triangle plane that disagrees with the triangle's vertices).
   Malformed,
   /// The caller's bytes are not 8-byte aligned (a broken precondition of
   /// viewWorld that is reported rather than read misaligned).
@@ -122,7 +143,22 @@ struct OpenResult {
 
 /// Maps `path` read-only and verifies it (FlatBuffers verifier, then semantic
 /// checks: see LoadStatus::Malformed). Cost: one pass over the blob, no copy of
-/// geometry. Never throws for bad bytes; returns a status instead.
+/// geometry. Never throws for bad bytes; returns a status instead. Never
+/// blocks: a FIFO, device or socket is refused (CannotOpen, "not a regular
+/// file") without waiting for a writer.
+///
+/// Contract: the file must not be modified in place while a World made from
+/// it (or any copy) is alive. The World reads the mapped pages of the file
+/// itself, verified once at open: a file truncated under it kills the
+/// process with SIGBUS on the next read, and bytes written into it change
+/// the level under the running game, unverified. Replace a level instead,
+/// the way bspc writes one: write the new file beside it and rename() it
+/// over the old path. The open World keeps the old file's pages (the old
+/// inode lives until its last mapping goes), and the next openWorld of the
+/// path sees the new level. Safe reload: open the new World, and swap it in
+/// only when the open succeeded (keep the old one otherwise); release the
+/// old World once no thread steps against it. Copying a level with `cp`
+/// onto an open path writes in place: copy to a temporary name, then `mv`.
 OpenResult openWorld(const std::filesystem::path& path);
 
 /// Verifies caller-owned bytes and views them in place. The bytes must stay
