@@ -5,6 +5,7 @@
 #include <bspf/thread_pool.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <optional>
@@ -146,34 +147,43 @@ const char* toString(InvalidInput invalid) {
 namespace {
 
 // The step's entry check (stepBody; stepBodies uses it to leave bodies out
-// of the body phase). The reach is bounded in double, so the check itself
-// cannot overflow: friction only slows the horizontal velocity and the cap
-// only limits it, so the desired end is within (|v| + (|force| + gravity)
-// dt) dt of the position.
+// of the body phase). It runs twice per body per frame, so it takes no
+// square root: friction only slows the horizontal velocity and the cap only
+// limits it, so the desired end is within (|v| + (|force| + gravity) dt) dt
+// of the position, bounded here with sums of absolute components (never
+// less than the lengths). In float: a sum that overflows is infinite, and
+// fails the bound as it should.
 InvalidInput checkStepInputs(const Body& body, const Vec3& force, float dt) {
-  if (!body.position.allFinite()) return InvalidInput::Position;
-  if (!body.velocity.allFinite()) return InvalidInput::Velocity;
-  if (!force.allFinite()) return InvalidInput::Force;
-  if (!(dt > 0) || !std::isfinite(dt)) return InvalidInput::TimeStep;
+  // One product by zero catches every NaN or infinity at once (it makes a
+  // NaN); the checks one by one run only to name the culprit.
+  const float probe = (body.position.sum() + body.velocity.sum() + force.sum() + dt) * 0.0f;
+  if (probe != 0.0f || !(dt > 0)) {
+    if (!body.position.allFinite()) return InvalidInput::Position;
+    if (!body.velocity.allFinite()) return InvalidInput::Velocity;
+    if (!force.allFinite()) return InvalidInput::Force;
+    if (!(dt > 0) || !std::isfinite(dt)) return InvalidInput::TimeStep;
+  }
   for (const float r : {body.radii.xz, body.radii.y})
     if (!(r >= kMinBodyRadius && r <= kMaxBodyRadius)) return InvalidInput::Radii;
   if (!settingsInRange(body)) return InvalidInput::Settings;
-  const double speed = body.velocity.cast<double>().norm() +
-                       (force.cast<double>().norm() + body.settings.gravity) * dt;
-  const double reach = body.position.cast<double>().cwiseAbs().maxCoeff() + speed * dt;
+  const float speed =
+      body.velocity.cwiseAbs().sum() + (force.cwiseAbs().sum() + body.settings.gravity) * dt;
+  const float reach = body.position.cwiseAbs().maxCoeff() + speed * dt;
   if (!(reach <= kMaxBodyCoordinate)) return InvalidInput::OutOfReach;
   return InvalidInput::None;
 }
 
 }  // namespace
 
-void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepScratch& scratch,
-              StepReport* report) {
+namespace detail {
+
+InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt,
+                     StepScratch& scratch, StepReport* report) {
   if (report) *report = StepReport{};
   if (const InvalidInput invalid = checkStepInputs(body, force, dt);
       invalid != InvalidInput::None) {
     if (report) report->invalidInput = invalid;
-    return;
+    return invalid;
   }
 
   detail::futureVelocity(body, force, dt);
@@ -197,6 +207,14 @@ void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepS
     recordSlide(report, slide, true);
     report->grounded = body.grounded;
   }
+  return InvalidInput::None;
+}
+
+}  // namespace detail
+
+void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepScratch& scratch,
+              StepReport* report) {
+  detail::stepOne(world, body, force, dt, scratch, report);
 }
 
 void stepBodiesAgainstLevel(const World& world, std::span<Body> bodies,
@@ -209,21 +227,38 @@ void stepBodiesAgainstLevel(const World& world, std::span<Body> bodies,
   detail::stepRangeAgainstLevel(world, bodies, forces, dt, scratch, reports, caches);
 }
 
+namespace {
+
+// stepBodiesAgainstLevel, saying how many bodies were not moved for
+// invalid input.
+std::size_t stepAllAgainstLevel(const World& world, std::span<Body> bodies,
+                                std::span<const Vec3> forces, float dt, StepScratch& scratch,
+                                std::span<StepReport> reports) {
+  std::vector<detail::BodyCache>& caches = scratch.workspace().bodies;
+  if (caches.size() < bodies.size()) caches.resize(bodies.size());
+  return detail::stepRangeAgainstLevel(world, bodies, forces, dt, scratch, reports, caches);
+}
+
+}  // namespace
+
 namespace detail {
 
-void stepRangeAgainstLevel(const World& world, std::span<Body> bodies, std::span<const Vec3> forces,
-                           float dt, StepScratch& scratch, std::span<StepReport> reports,
-                           std::span<BodyCache> caches) {
+std::size_t stepRangeAgainstLevel(const World& world, std::span<Body> bodies,
+                                  std::span<const Vec3> forces, float dt, StepScratch& scratch,
+                                  std::span<StepReport> reports, std::span<BodyCache> caches) {
   // Each body keeps its own nearby triangles from frame to frame (swapped in,
   // no copy). A list reordered by the caller only costs re-queries: a cache
   // answers only boxes inside the one it queried, whoever asks, and the
   // narrow phases test their candidates in triangle order, so results never
   // depend on what a cache held.
+  std::size_t invalid = 0;
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     swapBodyCache(scratch, caches[i]);
-    stepBody(world, bodies[i], forces[i], dt, scratch, reports.empty() ? nullptr : &reports[i]);
+    invalid += stepOne(world, bodies[i], forces[i], dt, scratch,
+                       reports.empty() ? nullptr : &reports[i]) != InvalidInput::None;
     swapBodyCache(scratch, caches[i]);
   }
+  return invalid;
 }
 
 }  // namespace detail
@@ -273,11 +308,15 @@ void pushValidBodiesApart(const World& world, std::span<Body> bodies,
 void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3> forces, float dt,
                 StepScratch& scratch, std::span<StepReport> reports) {
   assert(forces.size() == bodies.size());
-  const auto valid = validBodiesIfAnyInvalid(bodies, forces, dt);
-  stepBodiesAgainstLevel(world, bodies, forces, dt, scratch, reports);
-  if (valid) {
-    pushValidBodiesApart(world, bodies, *valid, scratch, reports);
-    return;
+  assert(reports.empty() || reports.size() == bodies.size());
+  // The level phase checks every body; only when it refused one are the
+  // bodies checked again (after their moves, which keep a valid body valid)
+  // to leave the refused ones out of the body phase.
+  if (stepAllAgainstLevel(world, bodies, forces, dt, scratch, reports) > 0) {
+    if (const auto valid = validBodiesIfAnyInvalid(bodies, forces, dt)) {
+      pushValidBodiesApart(world, bodies, *valid, scratch, reports);
+      return;
+    }
   }
   scratch.bodyGrid.build(bodies);
   pushBodiesApart(world, scratch.bodyGrid, bodies, 0, bodies.size(), scratch, reports);
@@ -288,7 +327,6 @@ void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3
   assert(forces.size() == bodies.size());
   assert(reports.empty() || reports.size() == bodies.size());
   assert(scratches.size() >= std::size_t(pool.threadCount()));
-  const auto valid = validBodiesIfAnyInvalid(bodies, forces, dt);
   // Small ranges balance the threads (a body against a wall costs several
   // times one in the open); each range still holds enough work to hide the
   // hand-out.
@@ -297,17 +335,20 @@ void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3
   // thread steps a body (each entry is touched by one thread at a time).
   std::vector<detail::BodyCache>& caches = scratches[0].workspace().bodies;
   if (caches.size() < bodies.size()) caches.resize(bodies.size());
+  std::atomic<std::size_t> invalid{0};
   pool.parallelFor(
       bodies.size(), kBodiesPerRange, [&](int thread, std::size_t first, std::size_t last) {
         const std::size_t count = last - first;
-        detail::stepRangeAgainstLevel(world, bodies.subspan(first, count),
-                                      forces.subspan(first, count), dt, scratches[thread],
-                                      reports.empty() ? reports : reports.subspan(first, count),
-                                      std::span(caches).subspan(first, count));
+        invalid += detail::stepRangeAgainstLevel(
+            world, bodies.subspan(first, count), forces.subspan(first, count), dt,
+            scratches[thread], reports.empty() ? reports : reports.subspan(first, count),
+            std::span(caches).subspan(first, count));
       });
-  if (valid) {
-    pushValidBodiesApart(world, bodies, *valid, scratches[0], reports);
-    return;
+  if (invalid > 0) {
+    if (const auto valid = validBodiesIfAnyInvalid(bodies, forces, dt)) {
+      pushValidBodiesApart(world, bodies, *valid, scratches[0], reports);
+      return;
+    }
   }
   BodyGrid& grid = scratches[0].bodyGrid;
   grid.build(bodies);

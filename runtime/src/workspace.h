@@ -213,11 +213,15 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
                std::span<BodyCache> caches);
 
 /// Steps bodies[i] against the level with caches[i] as its cache (see
-/// stepBodiesAgainstLevel). Precondition: caches is at least
-/// as long as bodies.
-void stepRangeAgainstLevel(const World& world, std::span<Body> bodies, std::span<const Vec3> forces,
-                           float dt, StepScratch& scratch, std::span<StepReport> reports,
-                           std::span<BodyCache> caches);
+/// stepBodiesAgainstLevel); returns how many bodies it did not move for
+/// invalid input. Precondition: caches is at least as long as bodies.
+std::size_t stepRangeAgainstLevel(const World& world, std::span<Body> bodies,
+                                  std::span<const Vec3> forces, float dt, StepScratch& scratch,
+                                  std::span<StepReport> reports, std::span<BodyCache> caches);
+
+/// stepBody, returning why the body was not moved (None: it was).
+InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt,
+                     StepScratch& scratch, StepReport* report);
 
 /// The planes method's pre-check values of triangle `triangle` for `radii`.
 FaceTest planesFaceTest(const World& world, std::uint32_t triangle, EllipsoidRadii radii);
