@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <limits>
 
 #include "narrow_phase.h"
 #include "slide.h"
@@ -127,14 +128,15 @@ void growPlanes(const World& world, std::uint32_t triangle, EllipsoidRadii radii
   // Each perpendicular plane pushed out by the body's extent along its own
   // normal (a local offset; the stored plane is never modified, the
   // article's second defect).
-  auto grow = [&](const schema::Plane& plane, Eigen::Vector4f& out) {
-    const schema::Vec3& n = plane.normal();
-    out = Eigen::Vector4f(n.x(), n.y(), n.z(), plane.distance() - effectiveRadius(n, radii));
+  auto grow = [&](const schema::Plane& plane, int k) {
+    const Vec3 n = toVec3(plane.normal());
+    grown.set(k, n, plane.distance() - effectiveRadius(n, radii));
   };
   for (int k = 0; k < 3; ++k) {
-    grow(*planes.edges()->Get(k), grown.planes[2 * k]);
-    grow(*planes.caps()->Get(k), grown.planes[2 * k + 1]);
+    grow(*planes.edges()->Get(k), 2 * k);
+    grow(*planes.caps()->Get(k), 2 * k + 1);
   }
+  for (int k = 6; k < 8; ++k) grown.set(k, Vec3::Zero(), -std::numeric_limits<float>::infinity());
   grown.ready = true;
 }
 

@@ -11,11 +11,16 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <utility>
 #include <vector>
 
 #include "narrow_phase.h"
+
+#if (defined(__SSE2__) || defined(_M_X64) || defined(_M_AMD64)) && !defined(BSPF_SCALAR_MASKS)
+#include <emmintrin.h>
+#endif
 
 namespace bspf::detail {
 
@@ -32,15 +37,41 @@ struct FaceTest {
 /// touch the triangle grown by the body (a superset of where it touches).
 /// Made only for the few candidates that pass the box test and the
 /// pre-check (growPlanes).
-struct GrownTriangle {
+struct alignas(16) GrownTriangle {
+  /// Plane k (edges 0, 2, 4; caps 1, 3, 5) as normal and offset: inside
+  /// when dot(normal, p) >= offset for every k. Lanes 6 and 7 always hold
+  /// (zero normal, offset -infinity), so the test takes two groups of 4.
+  float normalX[8], normalY[8], normalZ[8], offset[8];
   bool ready = false;
-  /// (normal, offset): inside when dot(normal, p) >= offset for all six.
-  std::array<Eigen::Vector4f, 6> planes;
 
-  /// Precondition: ready.
+  void set(int k, const Vec3& normal, float planeOffset) {
+    normalX[k] = normal.x(), normalY[k] = normal.y(), normalZ[k] = normal.z();
+    offset[k] = planeOffset;
+  }
+
+  /// Precondition: ready. With SSE, 4 planes per instruction; the same
+  /// float operations in the same order as insideOneByOne (the tests
+  /// compare them).
   bool inside(const Vec3& p) const {
-    for (const Eigen::Vector4f& plane : planes)
-      if (plane.head<3>().dot(p) < plane.w()) return false;
+#if (defined(__SSE2__) || defined(_M_X64) || defined(_M_AMD64)) && !defined(BSPF_SCALAR_MASKS)
+    const __m128 x = _mm_set1_ps(p.x()), y = _mm_set1_ps(p.y()), z = _mm_set1_ps(p.z());
+    int outside = 0;
+    for (int first = 0; first < 8; first += 4) {
+      const __m128 d = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_load_ps(normalX + first), x),
+                                             _mm_mul_ps(_mm_load_ps(normalY + first), y)),
+                                  _mm_mul_ps(_mm_load_ps(normalZ + first), z));
+      outside |= _mm_movemask_ps(_mm_cmplt_ps(d, _mm_load_ps(offset + first)));
+    }
+    return outside == 0;
+#else
+    return insideOneByOne(p);
+#endif
+  }
+
+  /// inside(), a plane at a time: the reference.
+  bool insideOneByOne(const Vec3& p) const {
+    for (int k = 0; k < 6; ++k)
+      if (normalX[k] * p.x() + normalY[k] * p.y() + normalZ[k] * p.z() < offset[k]) return false;
     return true;
   }
 };

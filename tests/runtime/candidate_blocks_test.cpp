@@ -5,6 +5,7 @@
 // near each box it asks for.
 #include <bit>
 #include <catch2/catch.hpp>
+#include <limits>
 #include <random>
 #include <set>
 
@@ -131,4 +132,23 @@ TEST_CASE("a slide's candidate blocks hold every triangle near each box it asks 
     CHECK(!expected.empty());
     for (const std::uint32_t t : expected) CHECK(listed.count(t) == 1);
   }
+}
+
+TEST_CASE("the six-plane test with SSE agrees with the plane-by-plane reference") {
+  std::mt19937 rng(11);
+  int inside = 0;
+  for (int round = 0; round < 20000; ++round) {
+    bspf::detail::GrownTriangle grown;
+    for (int k = 0; k < 6; ++k)
+      grown.set(k, randomPoint(rng, 1).normalized(),
+                std::uniform_real_distribution<float>(-3, 0.5f)(rng));
+    for (int k = 6; k < 8; ++k) grown.set(k, Vec3::Zero(), -std::numeric_limits<float>::infinity());
+    grown.ready = true;
+    const Vec3 p = randomPoint(rng, 2);
+    INFO("round " << round);
+    REQUIRE(grown.inside(p) == grown.insideOneByOne(p));
+    inside += grown.inside(p);
+  }
+  CHECK(inside > 1000);  // both outcomes exercised
+  CHECK(inside < 19000);
 }
