@@ -65,36 +65,37 @@ class NearestPushers {
 
 }  // namespace
 
-std::array<std::int64_t, 3> BodyGrid::cellOf(const Vec3& p, std::array<int, 3>* nearerSide) const {
-  const Vec3 scaled(p.x() / cellWidth_, p.y() / cellHeight_, p.z() / cellWidth_);
-  std::array<std::int64_t, 3> cell;
-  for (int axis = 0; axis < 3; ++axis) {
-    const float c = std::floor(scaled[axis]);
-    // Far beyond any level (or not a number), bodies share the edge cells of
-    // keyOf: still correct, as every pair found is tested for overlap.
-    cell[axis] = c > -1e9f && c < 1e9f ? std::int64_t(c) : 0;
-    if (nearerSide) (*nearerSide)[axis] = scaled[axis] - c < 0.5f ? -1 : 1;
-  }
-  return cell;
+namespace {
+
+// Cell coordinates are kept within +-kCellLimit, stored offset by 2^20 in 21
+// bits each of a key (about 1,900 km of 0.9 m cells along each axis): a
+// neighbour's coordinate, one more or less, then still fits, so the
+// neighbours' keys are the key plus or minus a constant.
+constexpr float kCellLimit = float((1 << 20) - 2);
+constexpr std::uint64_t kCellOffset = 1 << 20;
+constexpr std::array<std::uint64_t, 3> kAxisStep{std::uint64_t(1) << 42, std::uint64_t(1) << 21, 1};
+
+// The cell coordinate of `scaled` (a coordinate over the cell size), and
+// whether it lies in the upper half of the cell. Far beyond any level (or
+// not a number), bodies share the edge cells: still correct, as every pair
+// found is tested for overlap. (std::floor is a library call here; the
+// truncation and its correction are two instructions.)
+std::uint64_t cellCoordinate(float scaled, bool& upperHalf) {
+  float s = scaled > -kCellLimit ? scaled : -kCellLimit;  // also NaN
+  s = s < kCellLimit ? s : kCellLimit;
+  std::int32_t cell = std::int32_t(s);
+  cell -= float(cell) > s;
+  upperHalf = s - float(cell) >= 0.5f;
+  return std::uint64_t(std::int64_t(cell) + std::int64_t(kCellOffset));
 }
 
-std::uint64_t BodyGrid::keyOf(const std::array<std::int64_t, 3>& cell) {
-  // 21 bits a coordinate: 2 million cells along each axis, about 1,900 km of
-  // 0.9 m cells.
-  constexpr std::int64_t kHalfRange = 1 << 20;
-  auto bits = [](std::int64_t c) {
-    return std::uint64_t(std::clamp(c, -kHalfRange, kHalfRange - 1) + kHalfRange);
-  };
-  return bits(cell[0]) << 42 | bits(cell[1]) << 21 | bits(cell[2]);
-}
+}  // namespace
 
 std::uint32_t BodyGrid::find(std::uint64_t key) const {
   const std::uint32_t mask = std::uint32_t(cells_.size() - 1);
-  // splitmix64's finaliser: neighbouring cells differ in a few low bits of
-  // each coordinate, which a plain multiplication spreads poorly.
-  std::uint64_t h = (key ^ (key >> 30)) * 0xbf58476d1ce4e5b9ull;
-  h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
-  std::uint32_t slot = std::uint32_t(h ^ (h >> 31)) & mask;
+  // Fibonacci hashing: the golden-ratio multiplier carries the low bits that
+  // neighbouring cells differ in into the high bits kept.
+  std::uint32_t slot = std::uint32_t((key * 0x9e3779b97f4a7c15ull) >> shift_);
   while (cells_[slot].key != key && cells_[slot].key != kFree) slot = (slot + 1) & mask;
   return slot;
 }
@@ -106,27 +107,32 @@ void BodyGrid::build(std::span<const Body> bodies) {
   // apart on each axis, so a body's overlaps lie in its own cell and the
   // neighbour on the nearer side along each axis (8 cells, not 27: each
   // look-up is a likely cache miss).
-  cellWidth_ = cellHeight_ = 0;
+  float width = 0, height = 0;
   for (const Body& b : bodies) {
-    cellWidth_ = std::max(cellWidth_, 4 * b.radii.xz);
-    cellHeight_ = std::max(cellHeight_, 4 * b.radii.y);
+    width = std::max(width, 4 * b.radii.xz);
+    height = std::max(height, 4 * b.radii.y);
   }
-  if (!(cellWidth_ > 0)) cellWidth_ = 1;
-  if (!(cellHeight_ > 0)) cellHeight_ = 1;
+  inverseWidth_ = width > 0 ? 1 / width : 1;
+  inverseHeight_ = height > 0 ? 1 / height : 1;
   // At most half full, so a look-up probes few slots.
   std::size_t size = 16;
-  while (size < 2 * n) size *= 2;
+  shift_ = 60;
+  while (size < 2 * n) size *= 2, --shift_;
   cells_.assign(size, {kFree, 0, 0});
 
   // A counting sort by cell: count, lay the cells out in table order, place
   // each body in its cell's next place (stable: index order within a cell).
-  cellSlot_.resize(n);
+  places_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const std::uint64_t key = keyOf(cellOf(bodies[i].position));
+    const Vec3& p = bodies[i].position;
+    bool upper[3];
+    const std::uint64_t key = cellCoordinate(p.x() * inverseWidth_, upper[0]) << 42 |
+                              cellCoordinate(p.y() * inverseHeight_, upper[1]) << 21 |
+                              cellCoordinate(p.z() * inverseWidth_, upper[2]);
     const std::uint32_t slot = find(key);
     cells_[slot].key = key;
     ++cells_[slot].count;
-    cellSlot_[i] = slot;
+    places_[i] = {key, 0, slot, std::uint8_t(upper[0] | upper[1] << 1 | upper[2] << 2)};
   }
   std::uint32_t laid = 0;
   for (Cell& c : cells_) {
@@ -134,11 +140,10 @@ void BodyGrid::build(std::span<const Body> bodies) {
     laid += c.count;
   }
   entries_.resize(n);
-  slotOf_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    Cell& c = cells_[cellSlot_[i]];
-    slotOf_[i] = c.first++;
-    entries_[slotOf_[i]] = {bodies[i].position, bodies[i].radii, std::uint32_t(i)};
+    Place& place = places_[i];
+    place.entry = cells_[place.cellSlot].first++;
+    entries_[place.entry] = {bodies[i].position, bodies[i].radii, std::uint32_t(i)};
   }
   for (Cell& c : cells_) c.first -= c.count;
 }
@@ -159,7 +164,7 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
   if (grid.entries_.size() < 2) return;
   for (std::size_t i = first; i < last; ++i) {
     Body& body = bodies[i];
-    const BodyGrid::Entry& self = grid.entries_[grid.slotOf_[i]];
+    const BodyGrid::Entry& self = grid.entries_[grid.places_[i].entry];
     NearestPushers nearest;
     int examined = 0;
     auto examine = [&](const BodyGrid::Entry& other) {
@@ -183,21 +188,25 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
     // Its own cell first, outwards from its own place (a cell's bodies sit
     // in index order): in a pile larger than the candidate cap, each body
     // meets the bodies nearest it in index order, not all the same few.
-    const BodyGrid::Cell& own = grid.cells_[grid.cellSlot_[i]];
-    const std::uint32_t slot = grid.slotOf_[i];
+    const BodyGrid::Place& place = grid.places_[i];
+    const BodyGrid::Cell& own = grid.cells_[place.cellSlot];
     for (std::uint32_t step = 1; examined < kMaxBodyCandidates; ++step) {
-      const bool below = slot >= own.first + step, above = slot + step < own.first + own.count;
+      const bool below = place.entry >= own.first + step,
+                 above = place.entry + step < own.first + own.count;
       if (!below && !above) break;
-      if (below) examine(grid.entries_[slot - step]);
-      if (above && examined < kMaxBodyCandidates) examine(grid.entries_[slot + step]);
+      if (below) examine(grid.entries_[place.entry - step]);
+      if (above && examined < kMaxBodyCandidates) examine(grid.entries_[place.entry + step]);
     }
-    // Then the 7 other cells that may hold an overlapping body.
-    std::array<int, 3> side;
-    const std::array<std::int64_t, 3> cell = grid.cellOf(self.position, &side);
+    // Then the 7 other cells that may hold an overlapping body: corner bit a
+    // steps along axis a, up or down as the body lies in its cell.
+    std::array<std::uint64_t, 3> toNeighbour;
+    for (int axis = 0; axis < 3; ++axis)
+      toNeighbour[axis] = place.upperHalf >> axis & 1 ? kAxisStep[axis] : 0 - kAxisStep[axis];
     for (int corner = 1; corner < 8 && examined < kMaxBodyCandidates; ++corner) {
-      const BodyGrid::Cell& around = grid.cells_[grid.find(BodyGrid::keyOf(
-          {cell[0] + (corner & 1 ? side[0] : 0), cell[1] + (corner & 2 ? side[1] : 0),
-           cell[2] + (corner & 4 ? side[2] : 0)}))];
+      const std::uint64_t key = place.key + (corner & 1 ? toNeighbour[0] : 0) +
+                                (corner & 2 ? toNeighbour[1] : 0) +
+                                (corner & 4 ? toNeighbour[2] : 0);
+      const BodyGrid::Cell& around = grid.cells_[grid.find(key)];
       for (std::uint32_t e = around.first;
            e < around.first + around.count && examined < kMaxBodyCandidates; ++e)
         examine(grid.entries_[e]);

@@ -188,7 +188,7 @@ class BodyGrid {
   void build(std::span<const Body> bodies);
 
   /// Bodies in the last snapshot.
-  std::size_t size() const { return slotOf_.size(); }
+  std::size_t size() const { return places_.size(); }
 
  private:
   friend void detail::pushRange(const World&, const BodyGrid&, std::span<Body>, std::size_t,
@@ -204,22 +204,25 @@ class BodyGrid {
     std::uint32_t first;  ///< its entries: [first, first + count)
     std::uint32_t count;
   };
+  /// Where one body is in the snapshot, by body index.
+  struct Place {
+    std::uint64_t key;       ///< its cell's key
+    std::uint32_t entry;     ///< its entry in entries_
+    std::uint32_t cellSlot;  ///< its cell's slot in cells_
+    /// Bit a set: along axis a (x, y, z) it lies in the upper half of its
+    /// cell, so the neighbour that may hold an overlapping body is the one
+    /// above, else the one below.
+    std::uint8_t upperHalf;
+  };
   static constexpr std::uint64_t kFree = ~std::uint64_t(0);
-  /// The cell holding `position`, as integer coordinates; `nearerSide`, when
-  /// given, gets for each axis the neighbouring cell (-1 or +1) on the side
-  /// of the cell's middle the position lies.
-  std::array<std::int64_t, 3> cellOf(const Vec3& position,
-                                     std::array<int, 3>* nearerSide = nullptr) const;
-  /// A cell's coordinates packed into a table key.
-  static std::uint64_t keyOf(const std::array<std::int64_t, 3>& cell);
   /// The table slot of `key` when a body is in that cell, else of a free slot.
   std::uint32_t find(std::uint64_t key) const;
 
-  float cellWidth_ = 1, cellHeight_ = 1;
-  std::vector<Cell> cells_;              ///< open addressing, a power of 2 long
-  std::vector<Entry> entries_;           ///< by cell, body index order within a cell
-  std::vector<std::uint32_t> slotOf_;    ///< body index -> its entry
-  std::vector<std::uint32_t> cellSlot_;  ///< body index -> its slot in cells_
+  float inverseWidth_ = 1, inverseHeight_ = 1;  ///< 1 / cell size, horizontal and vertical
+  int shift_ = 60;                              ///< 64 - log2(cells_.size()), for the hash
+  std::vector<Cell> cells_;                     ///< open addressing, a power of 2 long
+  std::vector<Entry> entries_;                  ///< by cell, body index order within a cell
+  std::vector<Place> places_;                   ///< by body index
 };
 
 /// Per-thread scratch for the step. Reusable across worlds and frames; it
