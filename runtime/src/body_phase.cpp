@@ -156,6 +156,45 @@ void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> b
   detail::pushRange(world, grid, bodies, first, last, scratch, reports, caches);
 }
 
+namespace {
+
+// The pad, metres, of the query a push makes when the body's own query does
+// not hold the push's box (plus twice the push's length, as a slide's).
+constexpr float kPushQueryPad = 0.3f;
+
+// Whether a body with `radii` moving its centre from `from` to `to` keeps
+// clear of every triangle by more than a quarter of its skin: each triangle
+// whose box meets the box of the move is that far beyond the body's extent
+// in front of its plane (or behind it) at both ends, so the body never nears
+// its plane. Neither narrow phase then has anything to slide against (the
+// planes method's pre-check and the exact sweep's both reject every such
+// triangle), and the body goes the whole way. The margin covers rounding:
+// a body resting on a floor is a whole skin above it. `nearby` is the body's
+// own cache, made to cover the box if it does not already.
+bool touchesNothing(const World& world, const Vec3& from, const Vec3& to, EllipsoidRadii radii,
+                    float skin, NearbyTriangles& nearby, SweepScratch& sweep) {
+  const float margin = 0.25f * skin;
+  Bounds box = sweptBounds(from, to, radii);
+  box.low.array() -= margin;
+  box.high.array() += margin;
+  // Padded like a walking body's own query, so that this box usually lies
+  // inside the body's query, and a new query (when it does not) serves the
+  // body's next steps too. Only the cost depends on the pad.
+  nearby.cover(world, box.low, box.high, kPushQueryPad + 2 * (to - from).norm(), sweep);
+  for (const CandidateTriangle& c : nearby.list()) {
+    if (!boxesOverlap(c.low, c.high, box.low, box.high)) continue;
+    const schema::Plane& face = world.trianglePlanes()[c.triangle].face();
+    const Vec3 normal = toVec3(face.normal());
+    const float fromSide = normal.dot(from) - face.distance(),
+                toSide = normal.dot(to) - face.distance();
+    const float reach = effectiveRadius(normal, radii) + margin;
+    if (std::min(fromSide, toSide) < reach && std::max(fromSide, toSide) > -reach) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 namespace detail {
 
 void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies, std::size_t first,
@@ -228,18 +267,23 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
       const float closing = body.velocity.dot(away);
       if (closing < 0) body.velocity -= closing * away;
     }
-    // The push is a slide against the level with the body's own cache: its
-    // step has just made it cover the body's surroundings.
-    swapBodyCache(scratch, caches[i]);
-    const SlideResult slide =
-        slideAgainstLevel(world, body.position, body.position + push, body.radii, body.settings,
-                          walkableNormalY(body.settings), scratch);
-    swapBodyCache(scratch, caches[i]);
-    body.position = slide.end;
-    if (!reports.empty()) {
-      recordSlide(&reports[i], slide, false);
-      reports[i].bodyContacts += int(pushers.size());
+    // The push is a move against the level with the body's own cache (its
+    // step has just made it cover the body's surroundings): most pushes
+    // touch nothing and need no slide.
+    const Vec3 end = body.position + push;
+    if (!touchesNothing(world, body.position, end, body.radii, body.settings.skin, caches[i].nearby,
+                        scratch.sweep)) {
+      swapBodyCache(scratch, caches[i]);
+      const SlideResult slide =
+          slideAgainstLevel(world, body.position, end, body.radii, body.settings,
+                            walkableNormalY(body.settings), scratch);
+      swapBodyCache(scratch, caches[i]);
+      body.position = slide.end;
+      recordSlide(reports.empty() ? nullptr : &reports[i], slide, false);
+    } else {
+      body.position = end;
     }
+    if (!reports.empty()) reports[i].bodyContacts += int(pushers.size());
   }
 }
 

@@ -155,13 +155,16 @@ inline constexpr int kMaxBodyCandidates = 32;
 /// of them, the nearest): by half of each overlap (measured along the line
 /// between centres) plus half its skin, horizontally away from the other,
 /// all summed into one push that is a move against the level, so it never
-/// ends inside a wall. The velocity loses its horizontal closing speed
-/// towards each pusher. Pushes are horizontal so that a crowd never lifts a
-/// body (onto a wall's top, say): bodies do not stand on each other's heads.
-/// Two bodies at the same point, or one right above the other, part along a
-/// horizontal direction fixed by their pair of indices. Adds the push's
-/// contacts and the number of pushers (StepReport::bodyContacts) to
-/// `reports` (empty, or parallel to `bodies`).
+/// ends inside a wall (a push that stays more than a quarter of the skin
+/// clear of every triangle's plane, the common case, moves the body the
+/// whole way without a slide: the narrow phase would find nothing). The
+/// velocity loses its horizontal closing speed towards each pusher. Pushes
+/// are horizontal so that a crowd never lifts a body (onto a wall's top,
+/// say): bodies do not stand on each other's heads. Two bodies at the same
+/// point, or one right above the other, part along a horizontal direction
+/// fixed by their pair of indices. Adds the push's contacts and the number
+/// of pushers (StepReport::bodyContacts) to `reports` (empty, or parallel
+/// to `bodies`).
 /// Every push is computed from the positions `grid` was built from, not from
 /// bodies already pushed: the result does not depend on the order or the
 /// split of the ranges.
