@@ -258,15 +258,25 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
     // it along a tilted line between centres would turn a fast body's run
     // into a jump over the other's shoulder.
     Vec3 push = Vec3::Zero();
+    float largest = 0;
     for (const Pusher& p : pushers) {
       const Vec3 level(p.apart.x(), 0, p.apart.z());
       const float length = level.norm();
       const Vec3 away = p.distance > 0 && length > 1e-6f ? Vec3(level / length)
                                                          : tieBreakDirection(self.body, p.body);
-      push += (0.5f * p.overlap + 0.5f * body.settings.skin) * away;
+      const float share = 0.5f * p.overlap + 0.5f * body.settings.skin;
+      push += share * away;
+      largest = std::max(largest, share);
       const float closing = body.velocity.dot(away);
       if (closing < 0) body.velocity -= closing * away;
     }
+    // Never longer than the largest share: the shares of pushers on one side
+    // add up, and bodies spawned at one point flung each other up to 3 m in
+    // their first frame (into traps of the level's corners the walk itself
+    // seldom reaches). Overlaps the cap leaves are taken up in the next
+    // frames.
+    const float pushLength = push.norm();
+    if (pushLength > largest) push *= largest / pushLength;
     // The push is a move against the level with the body's own cache (its
     // step has just made it cover the body's surroundings): most pushes
     // touch nothing and need no slide.

@@ -207,6 +207,34 @@ TEST_CASE(
 }
 
 TEST_CASE(
+    "bodies spawned along a line a few centimetres long are each pushed at most half their "
+    "deepest overlap in a frame, not the sum of all their shares",
+    "[runtime][movement]") {
+  const bspf::test::CompiledMesh level(bspf::test::boxMesh({-20, -1, -20}, {20, 0, 20}));
+  // Eight bodies 1 cm apart along x: each end body has all seven others on
+  // one side, and the halves of those overlaps (about 0.45 m each) summed
+  // would fling it 3 m in one frame.
+  std::vector<Body> bodies(8);
+  for (std::size_t k = 0; k < bodies.size(); ++k)
+    bodies[k].position = Vec3(0.01f * float(k), 0.851f, 0.3f);
+  const std::vector<Body> start = bodies;
+  const std::vector<Vec3> forces(bodies.size(), Vec3::Zero());
+  std::vector<bspf::StepReport> reports(bodies.size());
+  bspf::StepScratch scratch;
+  bspf::stepBodies(level.world, bodies, forces, kDt, scratch, reports);
+  const float deepestHalf = 0.5f * 2 * bodies[0].radii.xz + 0.5f * bodies[0].settings.skin;
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    INFO("body " << k);
+    REQUIRE(reports[k].bodyContacts == 7);
+    const Vec3 move = bodies[k].position - start[k].position;
+    REQUIRE(std::hypot(move.x(), move.z()) <= deepestHalf + 1e-4f);
+  }
+  // The end bodies still part outwards at once.
+  REQUIRE(bodies.front().position.x() < start.front().position.x() - 0.3f);
+  REQUIRE(bodies.back().position.x() > start.back().position.x() + 0.3f);
+}
+
+TEST_CASE(
     "a body overlapped by more than kMaxBodyPushes bodies is pushed by the nearest ones, "
     "not by the first found",
     "[runtime][movement]") {

@@ -23,8 +23,9 @@
 //   3. contacts update the velocity (slide or bounce) and the ground state.
 // stepBodies then pushes overlapping bodies apart, horizontally (hashed grid
 // broad phase, every push computed from the positions after the level phase,
-// at most kMaxBodyPushes pushers per body), each body's summed push itself
-// one move against the level, so a push never enters a wall.
+// at most kMaxBodyPushes pushers per body), each body's summed push (no
+// longer than its largest share) itself one move against the level, so a
+// push never enters a wall.
 //
 // Many cores: stepBodies with a ThreadPool (bspf/thread_pool.h) runs both
 // phases in parallel; a game with its own job system calls the phases itself
@@ -154,17 +155,19 @@ inline constexpr int kMaxBodyCandidates = 32;
 /// pushed apart from the overlapping bodies of `grid` (at most kMaxBodyPushes
 /// of them, the nearest): by half of each overlap (measured along the line
 /// between centres) plus half its skin, horizontally away from the other,
-/// all summed into one push that is a move against the level, so it never
-/// ends inside a wall (a push that stays more than a quarter of the skin
-/// clear of every triangle's plane, the common case, moves the body the
-/// whole way without a slide: the narrow phase would find nothing). The
-/// velocity loses its horizontal closing speed towards each pusher. Pushes
-/// are horizontal so that a crowd never lifts a body (onto a wall's top,
-/// say): bodies do not stand on each other's heads. Two bodies at the same
-/// point, or one right above the other, part along a horizontal direction
-/// fixed by their pair of indices. Adds the push's contacts and the number
-/// of pushers (StepReport::bodyContacts) to `reports` (empty, or parallel
-/// to `bodies`).
+/// all summed into one push, never longer than the largest of these shares
+/// (in a pile the shares from one side would add up to a fling of metres).
+/// The push is a move against the level, so it never ends inside a wall (a
+/// push that stays more than a quarter of the skin clear of every
+/// triangle's plane, the common case, moves the body the whole way without
+/// a slide: the narrow phase would find nothing). The velocity loses its
+/// horizontal closing speed towards each pusher. Pushes are horizontal so
+/// that a crowd never lifts a body (onto a wall's top, say): bodies do not
+/// stand on each other's heads. Two bodies at the same point, or one right
+/// above the other, part along a horizontal direction fixed by their pair
+/// of indices. Adds the push's contacts and the number of pushers
+/// (StepReport::bodyContacts) to `reports` (empty, or parallel to
+/// `bodies`).
 /// Every push is computed from the positions `grid` was built from, not from
 /// bodies already pushed: the result does not depend on the order or the
 /// split of the ranges.
@@ -280,8 +283,9 @@ void stepBodiesAgainstLevel(const World& world, std::span<Body> bodies,
 
 /// Advances every body by `dt`: each against the level (stepBodiesAgainstLevel),
 /// then overlapping bodies are pushed apart (scratch.bodyGrid, then
-/// pushBodiesApart: each body by half of each overlap, horizontally, in one
-/// move against the level, so it never ends inside a wall). The broad phase
+/// pushBodiesApart: each body by half of each overlap, horizontally, summed
+/// but no longer than the largest half, in one move against the level, so
+/// it never ends inside a wall). The broad phase
 /// is a hashed grid and the pushers per body are capped (kMaxBodyPushes,
 /// kMaxBodyCandidates): the cost is linear in the number of bodies, even
 /// when they pile up at one point.
