@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -38,28 +39,55 @@ Vec3 tieBreakDirection(std::uint32_t self, std::uint32_t other) {
 }
 
 struct Pusher {
-  float distance;
   std::uint32_t body;
-  Vec3 apart;  ///< from the pusher's centre to this body's
+  bool apartKnown;  ///< the centres are apart, so `apart` gives a direction
+  Vec3 apart;       ///< from the pusher's centre to this body's
   float overlap;
 };
 
-// Keeps the kMaxBodyPushes nearest pushers, nearest first (ties: lower index).
+// Keeps the kMaxBodyPushes nearest pushers, nearest first (ties: lower
+// index). A pile offers up to kMaxBodyCandidates of them per body, so the
+// order lives in 64-bit keys (the distance's bits above the body index: a
+// non-negative float's bits order as the float does) and only keys and
+// one-byte slots move, not the pushers.
 class NearestPushers {
  public:
-  void offer(const Pusher& p) {
-    auto before = [](const Pusher& a, const Pusher& b) {
-      return a.distance != b.distance ? a.distance < b.distance : a.body < b.body;
-    };
-    if (count_ == kMaxBodyPushes && !before(p, pushers_[count_ - 1])) return;
-    int at = count_ < kMaxBodyPushes ? count_++ : count_ - 1;
-    for (; at > 0 && before(p, pushers_[at - 1]); --at) pushers_[at] = pushers_[at - 1];
-    pushers_[at] = p;
+  /// Whether a pusher at `distance` (>= 0) from this body, with index
+  /// `body`, is among the nearest so far; if so, offer() must follow.
+  bool wants(float distance, std::uint32_t body) {
+    key_ = std::uint64_t(std::bit_cast<std::uint32_t>(distance)) << 32 | body;
+    return count_ < kMaxBodyPushes || key_ < keys_[count_ - 1];
   }
-  std::span<const Pusher> all() const { return {pushers_.data(), std::size_t(count_)}; }
+  /// Keeps `p` (the pusher wants() was last asked about), dropping the
+  /// farthest when full.
+  void offer(const Pusher& p) {
+    // Not full: the next slot is free. Full: the farthest's slot is.
+    int at;
+    std::uint8_t slot;
+    if (count_ < kMaxBodyPushes) {
+      at = count_++;
+      slot = std::uint8_t(at);
+    } else {
+      at = count_ - 1;
+      slot = slots_[at];
+    }
+    pushers_[slot] = p;
+    for (; at > 0 && key_ < keys_[at - 1]; --at) {
+      keys_[at] = keys_[at - 1];
+      slots_[at] = slots_[at - 1];
+    }
+    keys_[at] = key_;
+    slots_[at] = slot;
+  }
+  int size() const { return count_; }
+  /// The k-th nearest, 0 <= k < size().
+  const Pusher& operator[](int k) const { return pushers_[slots_[k]]; }
 
  private:
   std::array<Pusher, kMaxBodyPushes> pushers_;
+  std::array<std::uint64_t, kMaxBodyPushes> keys_;
+  std::array<std::uint8_t, kMaxBodyPushes> slots_;
+  std::uint64_t key_ = 0;  ///< of the pusher last asked about
   int count_ = 0;
 };
 
@@ -73,7 +101,25 @@ namespace {
 // neighbours' keys are the key plus or minus a constant.
 constexpr float kCellLimit = float((1 << 20) - 2);
 constexpr std::uint64_t kCellOffset = 1 << 20;
-constexpr std::array<std::uint64_t, 3> kAxisStep{std::uint64_t(1) << 42, std::uint64_t(1) << 21, 1};
+
+// The key offsets from a cell to the 7 others that may hold a body
+// overlapping one in it, by the body's upper-half bits (Place::upperHalf):
+// one step along x, y, z, up or down as the body lies in its cell, and
+// their combinations (two's complement: a step down adds 2^64 - step).
+constexpr std::array<std::array<std::uint64_t, 7>, 8> kNeighbourOffsets = [] {
+  std::array<std::array<std::uint64_t, 7>, 8> table{};
+  for (int upper = 0; upper < 8; ++upper) {
+    std::array<std::uint64_t, 3> step{};
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::uint64_t one = std::uint64_t(1) << (42 - 21 * axis);
+      step[axis] = upper >> axis & 1 ? one : 0 - one;
+    }
+    for (int corner = 1; corner < 8; ++corner)
+      table[upper][corner - 1] =
+          (corner & 1 ? step[0] : 0) + (corner & 2 ? step[1] : 0) + (corner & 4 ? step[2] : 0);
+  }
+  return table;
+}();
 
 // The cell coordinate of `scaled` (a coordinate over the cell size), and
 // whether it lies in the upper half of the cell. Far beyond any level (or
@@ -121,7 +167,7 @@ void BodyGrid::build(std::span<const Body> bodies) {
   cells_.assign(size, {kFree, 0, 0});
 
   // A counting sort by cell: count, lay the cells out in table order, place
-  // each body in its cell's next place (stable: index order within a cell).
+  // each body in its cell's next place.
   places_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const Vec3& p = bodies[i].position;
@@ -134,18 +180,17 @@ void BodyGrid::build(std::span<const Body> bodies) {
     ++cells_[slot].count;
     places_[i] = {key, 0, slot, std::uint8_t(upper[0] | upper[1] << 1 | upper[2] << 2)};
   }
+  // Each cell's `first` at the end of its entries, then the bodies placed
+  // last index first: `first` comes back to the start, and a cell's bodies
+  // sit in index order.
   std::uint32_t laid = 0;
-  for (Cell& c : cells_) {
-    c.first = laid;
-    laid += c.count;
-  }
+  for (Cell& c : cells_) c.first = laid += c.count;
   entries_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = n; i-- > 0;) {
     Place& place = places_[i];
-    place.entry = cells_[place.cellSlot].first++;
+    place.entry = --cells_[place.cellSlot].first;
     entries_[place.entry] = {bodies[i].position, bodies[i].radii, std::uint32_t(i)};
   }
-  for (Cell& c : cells_) c.first -= c.count;
 }
 
 void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> bodies,
@@ -208,20 +253,28 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
     int examined = 0;
     auto examine = [&](const BodyGrid::Entry& other) {
       ++examined;
-      const Vec3 apart = self.position - other.position;  // from the other towards this body
+      // From the other towards this body, in scalars: a pile examines
+      // kMaxBodyCandidates a body, and Eigen's expressions cost twice this.
+      const float ax = self.position.x() - other.position.x(),
+                  ay = self.position.y() - other.position.y(),
+                  az = self.position.z() - other.position.z();
       // Overlapping ellipsoids overlap in their bounding boxes too: most
       // candidates of a walking crowd end here, before any square root.
       const float reachXZ = self.radii.xz + other.radii.xz;
-      if (std::abs(apart.x()) >= reachXZ || std::abs(apart.z()) >= reachXZ ||
-          std::abs(apart.y()) >= self.radii.y + other.radii.y)
+      if (std::abs(ax) >= reachXZ || std::abs(az) >= reachXZ ||
+          std::abs(ay) >= self.radii.y + other.radii.y)
         return;
-      const float distance = apart.norm();
+      const float distance = std::sqrt(ax * ax + (ay * ay + az * az));  // as Eigen does
+      const bool apartKnown = distance > 1e-6f;
+      if (!nearest.wants(apartKnown ? distance : 0, other.body)) return;
       // At one point they part horizontally (tieBreakDirection).
-      const float overlap = distance > 1e-6f
-                                ? effectiveRadius(apart / distance, self.radii) +
-                                      effectiveRadius(apart / distance, other.radii) - distance
-                                : reachXZ;
-      if (overlap > 0) nearest.offer({distance > 1e-6f ? distance : 0, other.body, apart, overlap});
+      float overlap = reachXZ;
+      if (apartKnown) {
+        const Vec3 direction(ax / distance, ay / distance, az / distance);
+        overlap = effectiveRadius(direction, self.radii) + effectiveRadius(direction, other.radii) -
+                  distance;
+      }
+      if (overlap > 0) nearest.offer({other.body, apartKnown, Vec3(ax, ay, az), overlap});
     };
 
     // Its own cell first, outwards from its own place (a cell's bodies sit
@@ -236,34 +289,30 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
       if (below) examine(grid.entries_[place.entry - step]);
       if (above && examined < kMaxBodyCandidates) examine(grid.entries_[place.entry + step]);
     }
-    // Then the 7 other cells that may hold an overlapping body: corner bit a
-    // steps along axis a, up or down as the body lies in its cell.
-    std::array<std::uint64_t, 3> toNeighbour;
-    for (int axis = 0; axis < 3; ++axis)
-      toNeighbour[axis] = place.upperHalf >> axis & 1 ? kAxisStep[axis] : 0 - kAxisStep[axis];
-    for (int corner = 1; corner < 8 && examined < kMaxBodyCandidates; ++corner) {
-      const std::uint64_t key = place.key + (corner & 1 ? toNeighbour[0] : 0) +
-                                (corner & 2 ? toNeighbour[1] : 0) +
-                                (corner & 4 ? toNeighbour[2] : 0);
-      const BodyGrid::Cell& around = grid.cells_[grid.find(key)];
-      for (std::uint32_t e = around.first;
-           e < around.first + around.count && examined < kMaxBodyCandidates; ++e)
+    // Then the 7 other cells that may hold an overlapping body (most are
+    // empty: a look-up is a hash and a compare or two).
+    for (const std::uint64_t offset : kNeighbourOffsets[place.upperHalf]) {
+      const BodyGrid::Cell& around = grid.cells_[grid.find(place.key + offset)];
+      if (around.count == 0) continue;
+      for (std::uint32_t e = around.first, end = around.first + around.count; e < end; ++e) {
+        if (examined == kMaxBodyCandidates) break;
         examine(grid.entries_[e]);
+      }
     }
 
-    const std::span<const Pusher> pushers = nearest.all();
-    if (pushers.empty()) continue;
+    if (nearest.size() == 0) continue;
     // Half of each overlap, plus half the skin so that the pair ends just
     // apart; the velocity loses only its horizontal closing speed: removing
     // it along a tilted line between centres would turn a fast body's run
     // into a jump over the other's shoulder.
     Vec3 push = Vec3::Zero();
     float largest = 0;
-    for (const Pusher& p : pushers) {
+    for (int k = 0; k < nearest.size(); ++k) {
+      const Pusher& p = nearest[k];
       const Vec3 level(p.apart.x(), 0, p.apart.z());
       const float length = level.norm();
-      const Vec3 away = p.distance > 0 && length > 1e-6f ? Vec3(level / length)
-                                                         : tieBreakDirection(self.body, p.body);
+      const Vec3 away = p.apartKnown && length > 1e-6f ? Vec3(level / length)
+                                                       : tieBreakDirection(self.body, p.body);
       const float share = 0.5f * p.overlap + 0.5f * body.settings.skin;
       push += share * away;
       largest = std::max(largest, share);
@@ -293,7 +342,7 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
     } else {
       body.position = end;
     }
-    if (!reports.empty()) reports[i].bodyContacts += int(pushers.size());
+    if (!reports.empty()) reports[i].bodyContacts += nearest.size();
   }
 }
 
