@@ -101,6 +101,7 @@ namespace {
 // neighbours' keys are the key plus or minus a constant.
 constexpr float kCellLimit = float((1 << 20) - 2);
 constexpr std::uint64_t kCellOffset = 1 << 20;
+constexpr std::uint64_t kFieldMask = (std::uint64_t(1) << 21) - 1;
 
 // The key offsets from a cell to the 7 others that may hold a body
 // overlapping one in it, by the body's upper-half bits (Place::upperHalf):
@@ -121,18 +122,19 @@ constexpr std::array<std::array<std::uint64_t, 7>, 8> kNeighbourOffsets = [] {
   return table;
 }();
 
-// The cell coordinate of `scaled` (a coordinate over the cell size), and
-// whether it lies in the upper half of the cell. Far beyond any level (or
-// not a number), bodies share the edge cells: still correct, as every pair
-// found is tested for overlap. (std::floor is a library call here; the
-// truncation and its correction are two instructions.)
+// The cell coordinate of `scaled` (a coordinate over the cell size), offset
+// by kCellOffset, and whether it lies in the upper half of the cell. Far
+// beyond any level (or not a number), bodies share the edge cells: still
+// correct, as every pair found is tested for overlap. (std::floor is a
+// library call here; offset into positive doubles, exactly, truncation is
+// the floor.)
 std::uint64_t cellCoordinate(float scaled, bool& upperHalf) {
   float s = scaled > -kCellLimit ? scaled : -kCellLimit;  // also NaN
   s = s < kCellLimit ? s : kCellLimit;
-  std::int32_t cell = std::int32_t(s);
-  cell -= float(cell) > s;
-  upperHalf = s - float(cell) >= 0.5f;
-  return std::uint64_t(std::int64_t(cell) + std::int64_t(kCellOffset));
+  const double offset = double(s) + double(kCellOffset);
+  const std::int64_t cell = std::int64_t(offset);
+  upperHalf = offset - double(cell) >= 0.5;
+  return std::uint64_t(cell);
 }
 
 }  // namespace
@@ -169,16 +171,40 @@ void BodyGrid::build(std::span<const Body> bodies) {
   // A counting sort by cell: count, lay the cells out in table order, place
   // each body in its cell's next place.
   places_.resize(n);
+  std::array<std::uint64_t, 3> lowCell{kFieldMask, kFieldMask, kFieldMask}, highCell{};
   for (std::size_t i = 0; i < n; ++i) {
     const Vec3& p = bodies[i].position;
     bool upper[3];
-    const std::uint64_t key = cellCoordinate(p.x() * inverseWidth_, upper[0]) << 42 |
-                              cellCoordinate(p.y() * inverseHeight_, upper[1]) << 21 |
-                              cellCoordinate(p.z() * inverseWidth_, upper[2]);
+    const std::array<std::uint64_t, 3> cell{cellCoordinate(p.x() * inverseWidth_, upper[0]),
+                                            cellCoordinate(p.y() * inverseHeight_, upper[1]),
+                                            cellCoordinate(p.z() * inverseWidth_, upper[2])};
+    for (int axis = 0; axis < 3; ++axis) {
+      lowCell[axis] = std::min(lowCell[axis], cell[axis]);
+      highCell[axis] = std::max(highCell[axis], cell[axis]);
+    }
+    const std::uint64_t key = cell[0] << 42 | cell[1] << 21 | cell[2];
     const std::uint32_t slot = find(key);
     cells_[slot].key = key;
     ++cells_[slot].count;
-    places_[i] = {key, 0, slot, std::uint8_t(upper[0] | upper[1] << 1 | upper[2] << 2)};
+    places_[i] = {key, 0, slot, 0, std::uint8_t(upper[0] | upper[1] << 1 | upper[2] << 2)};
+  }
+  // The occupancy bits, when their box is small: a crowd on a level spans a
+  // few thousand cells at most.
+  occupied_.clear();
+  std::array<std::uint64_t, 3> span{};
+  for (int axis = 0; axis < 3; ++axis) span[axis] = n > 0 ? highCell[axis] - lowCell[axis] + 3 : 0;
+  const bool bits = n > 0 && span[0] * span[1] * span[2] <= 512 * n + 4096;
+  if (bits) {
+    occupied_.assign((span[0] * span[1] * span[2] + 63) / 64, 0);
+    const std::array<std::uint32_t, 3> stride{1, std::uint32_t(span[0]),
+                                              std::uint32_t(span[0] * span[1])};
+    for (int upper = 0; upper < 8; ++upper)
+      for (int corner = 1; corner < 8; ++corner) {
+        std::uint32_t offset = 0;
+        for (int axis = 0; axis < 3; ++axis)
+          if (corner >> axis & 1) offset += upper >> axis & 1 ? stride[axis] : 0 - stride[axis];
+        bitOffsets_[upper][corner - 1] = offset;
+      }
   }
   // Each cell's `first` at the end of its entries, then the bodies placed
   // last index first: `first` comes back to the start, and a cell's bodies
@@ -190,6 +216,13 @@ void BodyGrid::build(std::span<const Body> bodies) {
     Place& place = places_[i];
     place.entry = --cells_[place.cellSlot].first;
     entries_[place.entry] = {bodies[i].position, bodies[i].radii, std::uint32_t(i)};
+    if (bits) {
+      // One cell of margin, so a neighbour's bit is always in the box.
+      place.bit = std::uint32_t((place.key >> 42) - lowCell[0] + 1 +
+                                span[0] * ((place.key >> 21 & kFieldMask) - lowCell[1] + 1 +
+                                           span[1] * ((place.key & kFieldMask) - lowCell[2] + 1)));
+      occupied_[place.bit >> 6] |= std::uint64_t(1) << (place.bit & 63);
+    }
   }
 }
 
@@ -289,15 +322,25 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
       if (below) examine(grid.entries_[place.entry - step]);
       if (above && examined < kMaxBodyCandidates) examine(grid.entries_[place.entry + step]);
     }
-    // Then the 7 other cells that may hold an overlapping body (most are
-    // empty: a look-up is a hash and a compare or two).
-    for (const std::uint64_t offset : kNeighbourOffsets[place.upperHalf]) {
-      const BodyGrid::Cell& around = grid.cells_[grid.find(place.key + offset)];
-      if (around.count == 0) continue;
-      for (std::uint32_t e = around.first, end = around.first + around.count; e < end; ++e) {
-        if (examined == kMaxBodyCandidates) break;
-        examine(grid.entries_[e]);
+    // Then the 7 other cells that may hold an overlapping body. Most are
+    // empty: their occupancy bits, when kept, spare those a hash look-up.
+    unsigned around = 0x7f;
+    if (!grid.occupied_.empty()) {
+      around = 0;
+      const std::array<std::uint32_t, 7>& offsets = grid.bitOffsets_[place.upperHalf];
+      const std::uint64_t* occupied = grid.occupied_.data();
+      for (int k = 0; k < 7; ++k) {
+        const std::uint32_t bit = place.bit + offsets[k];
+        around |= unsigned(occupied[bit >> 6] >> (bit & 63) & 1) << k;
       }
+    }
+    for (; around != 0 && examined < kMaxBodyCandidates; around &= around - 1) {
+      const int k = std::countr_zero(around);
+      const BodyGrid::Cell& cell =
+          grid.cells_[grid.find(place.key + kNeighbourOffsets[place.upperHalf][k])];
+      for (std::uint32_t e = cell.first, end = cell.first + cell.count;
+           e < end && examined < kMaxBodyCandidates; ++e)
+        examine(grid.entries_[e]);
     }
 
     if (nearest.size() == 0) continue;

@@ -215,6 +215,7 @@ class BodyGrid {
     std::uint64_t key;       ///< its cell's key
     std::uint32_t entry;     ///< its entry in entries_
     std::uint32_t cellSlot;  ///< its cell's slot in cells_
+    std::uint32_t bit;       ///< its cell's bit in occupied_ (when kept)
     /// Bit a set: along axis a (x, y, z) it lies in the upper half of its
     /// cell, so the neighbour that may hold an overlapping body is the one
     /// above, else the one below.
@@ -229,6 +230,14 @@ class BodyGrid {
   std::vector<Cell> cells_;                     ///< open addressing, a power of 2 long
   std::vector<Entry> entries_;                  ///< by cell, body index order within a cell
   std::vector<Place> places_;                   ///< by body index
+  /// When the box of the occupied cells, grown by one cell on every side, is
+  /// small (a few hundred cells a body): a bit a cell of it, set where a
+  /// body is, so that most empty neighbours cost a bit test, not a hash
+  /// look-up. Empty when that box is too large.
+  std::vector<std::uint64_t> occupied_;
+  /// The bit offsets in occupied_ to a cell's 7 neighbours, by upperHalf (as
+  /// the key offsets; modulo 2^32).
+  std::array<std::array<std::uint32_t, 7>, 8> bitOffsets_{};
 };
 
 /// Per-thread scratch for the step. Reusable across worlds and frames; it
