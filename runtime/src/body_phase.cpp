@@ -1,7 +1,8 @@
 // The body-against-body phase of stepBodies: a hashed grid of the bodies'
 // positions after the level phase, then, for each body independently, the
-// sum of the pushes from its nearest overlapping bodies, applied as one move
-// against the level.
+// sum of the pushes from its nearest overlapping bodies (no longer than the
+// largest of them), applied as one move against the level: a slide only
+// when the move comes near a triangle.
 #include <bspf/movement.h>
 
 #include <algorithm>
@@ -90,10 +91,6 @@ class NearestPushers {
   std::uint64_t key_ = 0;  ///< of the pusher last asked about
   int count_ = 0;
 };
-
-}  // namespace
-
-namespace {
 
 // Cell coordinates are kept within +-kCellLimit, stored offset by 2^20 in 21
 // bits each of a key (about 1,900 km of 0.9 m cells along each axis): a

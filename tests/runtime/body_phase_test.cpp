@@ -268,6 +268,42 @@ TEST_CASE(
 }
 
 TEST_CASE(
+    "two bodies overlapping across a grid cell border, along any axis or across a corner, "
+    "push each other apart",
+    "[runtime][movement]") {
+  // Cells are 1.8 m wide (four radii) and 3.4 m tall, with borders at 0. A
+  // third body 10 km away makes the occupied cells' box too large for the
+  // occupancy bits, so both ways of finding a neighbour cell are used.
+  const bspf::test::CompiledMesh level(bspf::test::boxMesh({-20, -1, -20}, {20, 0, 20}));
+  const bool farBody = GENERATE(false, true);
+  const Vec3 offset = GENERATE(Vec3(0.5f, 0, 0), Vec3(0, 0, 0.5f), Vec3(0.4f, 0, 0.4f),
+                               Vec3(-0.5f, 0, 0), Vec3(0, 0, -0.5f), Vec3(-0.4f, 0, 0.4f));
+  INFO("offset " << offset.transpose() << (farBody ? ", a body 10 km away" : ""));
+  for (const float border : {0.0f, 1.8f, -1.8f}) {
+    INFO("border at " << border);
+    // Each centre 0.1 to 0.3 m from the border, on either side of it.
+    const Vec3 middle(border + 0.0123f, 0.851f, border - 0.0077f);
+    std::vector<Body> bodies(2);
+    bodies[0].position = middle - 0.5f * offset;
+    bodies[1].position = middle + 0.5f * offset;
+    if (farBody) {
+      bodies.emplace_back();
+      bodies.back().position = Vec3(10000, 0.851f, 0);
+    }
+    const std::vector<Body> start = bodies;
+    const std::vector<Vec3> forces(bodies.size(), Vec3::Zero());
+    std::vector<bspf::StepReport> reports(bodies.size());
+    bspf::StepScratch scratch;
+    bspf::stepBodies(level.world, bodies, forces, kDt, scratch, reports);
+    REQUIRE(reports[0].bodyContacts == 1);
+    REQUIRE(reports[1].bodyContacts == 1);
+    const Vec3 before = start[1].position - start[0].position;
+    const Vec3 after = bodies[1].position - bodies[0].position;
+    REQUIRE(after.norm() > before.norm() + 0.3f);
+  }
+}
+
+TEST_CASE(
     "two bodies overlapping one above the other across grid cells push each other apart "
     "equally",
     "[runtime][movement]") {
