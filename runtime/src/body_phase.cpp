@@ -1,11 +1,13 @@
 // The body-against-body phase of stepBodies: a hashed grid of the bodies'
 // positions after the level phase, then, for each body independently, the
-// sum of the pushes from its nearest overlapping bodies, applied as one move
-// against the level.
+// sum of the pushes from its nearest overlapping bodies (no longer than the
+// largest of them), applied as one move against the level: a slide only
+// when the move comes near a triangle.
 #include <bspf/movement.h>
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -38,63 +40,107 @@ Vec3 tieBreakDirection(std::uint32_t self, std::uint32_t other) {
 }
 
 struct Pusher {
-  float distance;
   std::uint32_t body;
-  Vec3 apart;  ///< from the pusher's centre to this body's
+  bool apartKnown;  ///< the centres are apart, so `apart` gives a direction
+  Vec3 apart;       ///< from the pusher's centre to this body's
   float overlap;
 };
 
-// Keeps the kMaxBodyPushes nearest pushers, nearest first (ties: lower index).
+// Keeps the kMaxBodyPushes nearest pushers, nearest first (ties: lower
+// index). A pile offers up to kMaxBodyCandidates of them per body, so the
+// order lives in 64-bit keys (the distance's bits above the body index: a
+// non-negative float's bits order as the float does) and only keys and
+// one-byte slots move, not the pushers.
 class NearestPushers {
  public:
-  void offer(const Pusher& p) {
-    auto before = [](const Pusher& a, const Pusher& b) {
-      return a.distance != b.distance ? a.distance < b.distance : a.body < b.body;
-    };
-    if (count_ == kMaxBodyPushes && !before(p, pushers_[count_ - 1])) return;
-    int at = count_ < kMaxBodyPushes ? count_++ : count_ - 1;
-    for (; at > 0 && before(p, pushers_[at - 1]); --at) pushers_[at] = pushers_[at - 1];
-    pushers_[at] = p;
+  /// Whether a pusher at `distance` (>= 0) from this body, with index
+  /// `body`, is among the nearest so far; if so, offer() must follow.
+  bool wants(float distance, std::uint32_t body) {
+    key_ = std::uint64_t(std::bit_cast<std::uint32_t>(distance)) << 32 | body;
+    return count_ < kMaxBodyPushes || key_ < keys_[count_ - 1];
   }
-  std::span<const Pusher> all() const { return {pushers_.data(), std::size_t(count_)}; }
+  /// Keeps `p` (the pusher wants() was last asked about), dropping the
+  /// farthest when full.
+  void offer(const Pusher& p) {
+    // Not full: the next slot is free. Full: the farthest's slot is.
+    int at;
+    std::uint8_t slot;
+    if (count_ < kMaxBodyPushes) {
+      at = count_++;
+      slot = std::uint8_t(at);
+    } else {
+      at = count_ - 1;
+      slot = slots_[at];
+    }
+    pushers_[slot] = p;
+    for (; at > 0 && key_ < keys_[at - 1]; --at) {
+      keys_[at] = keys_[at - 1];
+      slots_[at] = slots_[at - 1];
+    }
+    keys_[at] = key_;
+    slots_[at] = slot;
+  }
+  int size() const { return count_; }
+  /// The k-th nearest, 0 <= k < size().
+  const Pusher& operator[](int k) const { return pushers_[slots_[k]]; }
 
  private:
   std::array<Pusher, kMaxBodyPushes> pushers_;
+  std::array<std::uint64_t, kMaxBodyPushes> keys_;
+  std::array<std::uint8_t, kMaxBodyPushes> slots_;
+  std::uint64_t key_ = 0;  ///< of the pusher last asked about
   int count_ = 0;
 };
 
-}  // namespace
+// Cell coordinates are kept within +-kCellLimit, stored offset by 2^20 in 21
+// bits each of a key (about 1,900 km of 0.9 m cells along each axis): a
+// neighbour's coordinate, one more or less, then still fits, so the
+// neighbours' keys are the key plus or minus a constant.
+constexpr float kCellLimit = float((1 << 20) - 2);
+constexpr std::uint64_t kCellOffset = 1 << 20;
+constexpr std::uint64_t kFieldMask = (std::uint64_t(1) << 21) - 1;
 
-std::array<std::int64_t, 3> BodyGrid::cellOf(const Vec3& p, std::array<int, 3>* nearerSide) const {
-  const Vec3 scaled(p.x() / cellWidth_, p.y() / cellHeight_, p.z() / cellWidth_);
-  std::array<std::int64_t, 3> cell;
-  for (int axis = 0; axis < 3; ++axis) {
-    const float c = std::floor(scaled[axis]);
-    // Far beyond any level (or not a number), bodies share the edge cells of
-    // keyOf: still correct, as every pair found is tested for overlap.
-    cell[axis] = c > -1e9f && c < 1e9f ? std::int64_t(c) : 0;
-    if (nearerSide) (*nearerSide)[axis] = scaled[axis] - c < 0.5f ? -1 : 1;
+// The key offsets from a cell to the 7 others that may hold a body
+// overlapping one in it, by the body's upper-half bits (Place::upperHalf):
+// one step along x, y, z, up or down as the body lies in its cell, and
+// their combinations (two's complement: a step down adds 2^64 - step).
+constexpr std::array<std::array<std::uint64_t, 7>, 8> kNeighbourOffsets = [] {
+  std::array<std::array<std::uint64_t, 7>, 8> table{};
+  for (int upper = 0; upper < 8; ++upper) {
+    std::array<std::uint64_t, 3> step{};
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::uint64_t one = std::uint64_t(1) << (42 - 21 * axis);
+      step[axis] = upper >> axis & 1 ? one : 0 - one;
+    }
+    for (int corner = 1; corner < 8; ++corner)
+      table[upper][corner - 1] =
+          (corner & 1 ? step[0] : 0) + (corner & 2 ? step[1] : 0) + (corner & 4 ? step[2] : 0);
   }
-  return cell;
+  return table;
+}();
+
+// The cell coordinate of `scaled` (a coordinate over the cell size), offset
+// by kCellOffset, and whether it lies in the upper half of the cell. Far
+// beyond any level (or not a number), bodies share the edge cells: still
+// correct, as every pair found is tested for overlap. (std::floor is a
+// library call here; offset into positive doubles, exactly, truncation is
+// the floor.)
+std::uint64_t cellCoordinate(float scaled, bool& upperHalf) {
+  float s = scaled > -kCellLimit ? scaled : -kCellLimit;  // also NaN
+  s = s < kCellLimit ? s : kCellLimit;
+  const double offset = double(s) + double(kCellOffset);
+  const std::int64_t cell = std::int64_t(offset);
+  upperHalf = offset - double(cell) >= 0.5;
+  return std::uint64_t(cell);
 }
 
-std::uint64_t BodyGrid::keyOf(const std::array<std::int64_t, 3>& cell) {
-  // 21 bits a coordinate: 2 million cells along each axis, about 1,900 km of
-  // 0.9 m cells.
-  constexpr std::int64_t kHalfRange = 1 << 20;
-  auto bits = [](std::int64_t c) {
-    return std::uint64_t(std::clamp(c, -kHalfRange, kHalfRange - 1) + kHalfRange);
-  };
-  return bits(cell[0]) << 42 | bits(cell[1]) << 21 | bits(cell[2]);
-}
+}  // namespace
 
 std::uint32_t BodyGrid::find(std::uint64_t key) const {
   const std::uint32_t mask = std::uint32_t(cells_.size() - 1);
-  // splitmix64's finaliser: neighbouring cells differ in a few low bits of
-  // each coordinate, which a plain multiplication spreads poorly.
-  std::uint64_t h = (key ^ (key >> 30)) * 0xbf58476d1ce4e5b9ull;
-  h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
-  std::uint32_t slot = std::uint32_t(h ^ (h >> 31)) & mask;
+  // Fibonacci hashing: the golden-ratio multiplier carries the low bits that
+  // neighbouring cells differ in into the high bits kept.
+  std::uint32_t slot = std::uint32_t((key * 0x9e3779b97f4a7c15ull) >> shift_);
   while (cells_[slot].key != key && cells_[slot].key != kFree) slot = (slot + 1) & mask;
   return slot;
 }
@@ -106,41 +152,75 @@ void BodyGrid::build(std::span<const Body> bodies) {
   // apart on each axis, so a body's overlaps lie in its own cell and the
   // neighbour on the nearer side along each axis (8 cells, not 27: each
   // look-up is a likely cache miss).
-  cellWidth_ = cellHeight_ = 0;
+  float width = 0, height = 0;
   for (const Body& b : bodies) {
-    cellWidth_ = std::max(cellWidth_, 4 * b.radii.xz);
-    cellHeight_ = std::max(cellHeight_, 4 * b.radii.y);
+    width = std::max(width, 4 * b.radii.xz);
+    height = std::max(height, 4 * b.radii.y);
   }
-  if (!(cellWidth_ > 0)) cellWidth_ = 1;
-  if (!(cellHeight_ > 0)) cellHeight_ = 1;
+  inverseWidth_ = width > 0 ? 1 / width : 1;
+  inverseHeight_ = height > 0 ? 1 / height : 1;
   // At most half full, so a look-up probes few slots.
   std::size_t size = 16;
-  while (size < 2 * n) size *= 2;
+  shift_ = 60;
+  while (size < 2 * n) size *= 2, --shift_;
   cells_.assign(size, {kFree, 0, 0});
 
   // A counting sort by cell: count, lay the cells out in table order, place
-  // each body in its cell's next place (stable: index order within a cell).
-  cellSlot_.resize(n);
+  // each body in its cell's next place.
+  places_.resize(n);
+  std::array<std::uint64_t, 3> lowCell{kFieldMask, kFieldMask, kFieldMask}, highCell{};
   for (std::size_t i = 0; i < n; ++i) {
-    const std::uint64_t key = keyOf(cellOf(bodies[i].position));
+    const Vec3& p = bodies[i].position;
+    bool upper[3];
+    const std::array<std::uint64_t, 3> cell{cellCoordinate(p.x() * inverseWidth_, upper[0]),
+                                            cellCoordinate(p.y() * inverseHeight_, upper[1]),
+                                            cellCoordinate(p.z() * inverseWidth_, upper[2])};
+    for (int axis = 0; axis < 3; ++axis) {
+      lowCell[axis] = std::min(lowCell[axis], cell[axis]);
+      highCell[axis] = std::max(highCell[axis], cell[axis]);
+    }
+    const std::uint64_t key = cell[0] << 42 | cell[1] << 21 | cell[2];
     const std::uint32_t slot = find(key);
     cells_[slot].key = key;
     ++cells_[slot].count;
-    cellSlot_[i] = slot;
+    places_[i] = {key, 0, slot, 0, std::uint8_t(upper[0] | upper[1] << 1 | upper[2] << 2)};
   }
+  // The occupancy bits, when their box is small: a crowd on a level spans a
+  // few thousand cells at most.
+  occupied_.clear();
+  std::array<std::uint64_t, 3> span{};
+  for (int axis = 0; axis < 3; ++axis) span[axis] = n > 0 ? highCell[axis] - lowCell[axis] + 3 : 0;
+  const bool bits = n > 0 && span[0] * span[1] * span[2] <= 512 * n + 4096;
+  if (bits) {
+    occupied_.assign((span[0] * span[1] * span[2] + 63) / 64, 0);
+    const std::array<std::uint32_t, 3> stride{1, std::uint32_t(span[0]),
+                                              std::uint32_t(span[0] * span[1])};
+    for (int upper = 0; upper < 8; ++upper)
+      for (int corner = 1; corner < 8; ++corner) {
+        std::uint32_t offset = 0;
+        for (int axis = 0; axis < 3; ++axis)
+          if (corner >> axis & 1) offset += upper >> axis & 1 ? stride[axis] : 0 - stride[axis];
+        bitOffsets_[upper][corner - 1] = offset;
+      }
+  }
+  // Each cell's `first` at the end of its entries, then the bodies placed
+  // last index first: `first` comes back to the start, and a cell's bodies
+  // sit in index order.
   std::uint32_t laid = 0;
-  for (Cell& c : cells_) {
-    c.first = laid;
-    laid += c.count;
-  }
+  for (Cell& c : cells_) c.first = laid += c.count;
   entries_.resize(n);
-  slotOf_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    Cell& c = cells_[cellSlot_[i]];
-    slotOf_[i] = c.first++;
-    entries_[slotOf_[i]] = {bodies[i].position, bodies[i].radii, std::uint32_t(i)};
+  for (std::size_t i = n; i-- > 0;) {
+    Place& place = places_[i];
+    place.entry = --cells_[place.cellSlot].first;
+    entries_[place.entry] = {bodies[i].position, bodies[i].radii, std::uint32_t(i)};
+    if (bits) {
+      // One cell of margin, so a neighbour's bit is always in the box.
+      place.bit = std::uint32_t((place.key >> 42) - lowCell[0] + 1 +
+                                span[0] * ((place.key >> 21 & kFieldMask) - lowCell[1] + 1 +
+                                           span[1] * ((place.key & kFieldMask) - lowCell[2] + 1)));
+      occupied_[place.bit >> 6] |= std::uint64_t(1) << (place.bit & 63);
+    }
   }
-  for (Cell& c : cells_) c.first -= c.count;
 }
 
 void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> bodies,
@@ -151,6 +231,45 @@ void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> b
   detail::pushRange(world, grid, bodies, first, last, scratch, reports, caches);
 }
 
+namespace {
+
+// The pad, metres, of the query a push makes when the body's own query does
+// not hold the push's box (plus twice the push's length, as a slide's).
+constexpr float kPushQueryPad = 0.3f;
+
+// Whether a body with `radii` moving its centre from `from` to `to` keeps
+// clear of every triangle by more than a quarter of its skin: each triangle
+// whose box meets the box of the move is that far beyond the body's extent
+// in front of its plane (or behind it) at both ends, so the body never nears
+// its plane. Neither narrow phase then has anything to slide against (the
+// planes method's pre-check and the exact sweep's both reject every such
+// triangle), and the body goes the whole way. The margin covers rounding:
+// a body resting on a floor is a whole skin above it. `nearby` is the body's
+// own cache, made to cover the box if it does not already.
+bool touchesNothing(const World& world, const Vec3& from, const Vec3& to, EllipsoidRadii radii,
+                    float skin, NearbyTriangles& nearby, SweepScratch& sweep) {
+  const float margin = 0.25f * skin;
+  Bounds box = sweptBounds(from, to, radii);
+  box.low.array() -= margin;
+  box.high.array() += margin;
+  // Padded like a walking body's own query, so that this box usually lies
+  // inside the body's query, and a new query (when it does not) serves the
+  // body's next steps too. Only the cost depends on the pad.
+  nearby.cover(world, box.low, box.high, kPushQueryPad + 2 * (to - from).norm(), sweep);
+  for (const CandidateTriangle& c : nearby.list()) {
+    if (!boxesOverlap(c.low, c.high, box.low, box.high)) continue;
+    const schema::Plane& face = world.trianglePlanes()[c.triangle].face();
+    const Vec3 normal = toVec3(face.normal());
+    const float fromSide = normal.dot(from) - face.distance(),
+                toSide = normal.dot(to) - face.distance();
+    const float reach = effectiveRadius(normal, radii) + margin;
+    if (std::min(fromSide, toSide) < reach && std::max(fromSide, toSide) > -reach) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 namespace detail {
 
 void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies, std::size_t first,
@@ -159,78 +278,111 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
   if (grid.entries_.size() < 2) return;
   for (std::size_t i = first; i < last; ++i) {
     Body& body = bodies[i];
-    const BodyGrid::Entry& self = grid.entries_[grid.slotOf_[i]];
+    const BodyGrid::Entry& self = grid.entries_[grid.places_[i].entry];
     NearestPushers nearest;
     int examined = 0;
     auto examine = [&](const BodyGrid::Entry& other) {
       ++examined;
-      const Vec3 apart = self.position - other.position;  // from the other towards this body
+      // From the other towards this body, in scalars: a pile examines
+      // kMaxBodyCandidates a body, and Eigen's expressions cost twice this.
+      const float ax = self.position.x() - other.position.x(),
+                  ay = self.position.y() - other.position.y(),
+                  az = self.position.z() - other.position.z();
       // Overlapping ellipsoids overlap in their bounding boxes too: most
       // candidates of a walking crowd end here, before any square root.
       const float reachXZ = self.radii.xz + other.radii.xz;
-      if (std::abs(apart.x()) >= reachXZ || std::abs(apart.z()) >= reachXZ ||
-          std::abs(apart.y()) >= self.radii.y + other.radii.y)
+      if (std::abs(ax) >= reachXZ || std::abs(az) >= reachXZ ||
+          std::abs(ay) >= self.radii.y + other.radii.y)
         return;
-      const float distance = apart.norm();
+      const float distance = std::sqrt(ax * ax + (ay * ay + az * az));  // as Eigen does
+      const bool apartKnown = distance > 1e-6f;
+      if (!nearest.wants(apartKnown ? distance : 0, other.body)) return;
       // At one point they part horizontally (tieBreakDirection).
-      const float overlap = distance > 1e-6f
-                                ? effectiveRadius(apart / distance, self.radii) +
-                                      effectiveRadius(apart / distance, other.radii) - distance
-                                : reachXZ;
-      if (overlap > 0) nearest.offer({distance > 1e-6f ? distance : 0, other.body, apart, overlap});
+      float overlap = reachXZ;
+      if (apartKnown) {
+        const Vec3 direction(ax / distance, ay / distance, az / distance);
+        overlap = effectiveRadius(direction, self.radii) + effectiveRadius(direction, other.radii) -
+                  distance;
+      }
+      if (overlap > 0) nearest.offer({other.body, apartKnown, Vec3(ax, ay, az), overlap});
     };
 
     // Its own cell first, outwards from its own place (a cell's bodies sit
     // in index order): in a pile larger than the candidate cap, each body
     // meets the bodies nearest it in index order, not all the same few.
-    const BodyGrid::Cell& own = grid.cells_[grid.cellSlot_[i]];
-    const std::uint32_t slot = grid.slotOf_[i];
+    const BodyGrid::Place& place = grid.places_[i];
+    const BodyGrid::Cell& own = grid.cells_[place.cellSlot];
     for (std::uint32_t step = 1; examined < kMaxBodyCandidates; ++step) {
-      const bool below = slot >= own.first + step, above = slot + step < own.first + own.count;
+      const bool below = place.entry >= own.first + step,
+                 above = place.entry + step < own.first + own.count;
       if (!below && !above) break;
-      if (below) examine(grid.entries_[slot - step]);
-      if (above && examined < kMaxBodyCandidates) examine(grid.entries_[slot + step]);
+      if (below) examine(grid.entries_[place.entry - step]);
+      if (above && examined < kMaxBodyCandidates) examine(grid.entries_[place.entry + step]);
     }
-    // Then the 7 other cells that may hold an overlapping body.
-    std::array<int, 3> side;
-    const std::array<std::int64_t, 3> cell = grid.cellOf(self.position, &side);
-    for (int corner = 1; corner < 8 && examined < kMaxBodyCandidates; ++corner) {
-      const BodyGrid::Cell& around = grid.cells_[grid.find(BodyGrid::keyOf(
-          {cell[0] + (corner & 1 ? side[0] : 0), cell[1] + (corner & 2 ? side[1] : 0),
-           cell[2] + (corner & 4 ? side[2] : 0)}))];
-      for (std::uint32_t e = around.first;
-           e < around.first + around.count && examined < kMaxBodyCandidates; ++e)
+    // Then the 7 other cells that may hold an overlapping body. Most are
+    // empty: their occupancy bits, when kept, spare those a hash look-up.
+    unsigned around = 0x7f;
+    if (!grid.occupied_.empty()) {
+      around = 0;
+      const std::array<std::uint32_t, 7>& offsets = grid.bitOffsets_[place.upperHalf];
+      const std::uint64_t* occupied = grid.occupied_.data();
+      for (int k = 0; k < 7; ++k) {
+        const std::uint32_t bit = place.bit + offsets[k];
+        around |= unsigned(occupied[bit >> 6] >> (bit & 63) & 1) << k;
+      }
+    }
+    for (; around != 0 && examined < kMaxBodyCandidates; around &= around - 1) {
+      const int k = std::countr_zero(around);
+      const BodyGrid::Cell& cell =
+          grid.cells_[grid.find(place.key + kNeighbourOffsets[place.upperHalf][k])];
+      for (std::uint32_t e = cell.first, end = cell.first + cell.count;
+           e < end && examined < kMaxBodyCandidates; ++e)
         examine(grid.entries_[e]);
     }
 
-    const std::span<const Pusher> pushers = nearest.all();
-    if (pushers.empty()) continue;
+    if (nearest.size() == 0) continue;
     // Half of each overlap, plus half the skin so that the pair ends just
     // apart; the velocity loses only its horizontal closing speed: removing
     // it along a tilted line between centres would turn a fast body's run
     // into a jump over the other's shoulder.
     Vec3 push = Vec3::Zero();
-    for (const Pusher& p : pushers) {
+    float largest = 0;
+    for (int k = 0; k < nearest.size(); ++k) {
+      const Pusher& p = nearest[k];
       const Vec3 level(p.apart.x(), 0, p.apart.z());
       const float length = level.norm();
-      const Vec3 away = p.distance > 0 && length > 1e-6f ? Vec3(level / length)
-                                                         : tieBreakDirection(self.body, p.body);
-      push += (0.5f * p.overlap + 0.5f * body.settings.skin) * away;
+      const Vec3 away = p.apartKnown && length > 1e-6f ? Vec3(level / length)
+                                                       : tieBreakDirection(self.body, p.body);
+      const float share = 0.5f * p.overlap + 0.5f * body.settings.skin;
+      push += share * away;
+      largest = std::max(largest, share);
       const float closing = body.velocity.dot(away);
       if (closing < 0) body.velocity -= closing * away;
     }
-    // The push is a slide against the level with the body's own cache: its
-    // step has just made it cover the body's surroundings.
-    swapBodyCache(scratch, caches[i]);
-    const SlideResult slide =
-        slideAgainstLevel(world, body.position, body.position + push, body.radii, body.settings,
-                          walkableNormalY(body.settings), scratch);
-    swapBodyCache(scratch, caches[i]);
-    body.position = slide.end;
-    if (!reports.empty()) {
-      recordSlide(&reports[i], slide, false);
-      reports[i].bodyContacts += int(pushers.size());
+    // Never longer than the largest share: the shares of pushers on one side
+    // add up, and bodies spawned at one point flung each other up to 3 m in
+    // their first frame (into traps of the level's corners the walk itself
+    // seldom reaches). Overlaps the cap leaves are taken up in the next
+    // frames.
+    const float pushLength = push.norm();
+    if (pushLength > largest) push *= largest / pushLength;
+    // The push is a move against the level with the body's own cache (its
+    // step has just made it cover the body's surroundings): most pushes
+    // touch nothing and need no slide.
+    const Vec3 end = body.position + push;
+    if (!touchesNothing(world, body.position, end, body.radii, body.settings.skin, caches[i].nearby,
+                        scratch.sweep)) {
+      swapBodyCache(scratch, caches[i]);
+      const SlideResult slide =
+          slideAgainstLevel(world, body.position, end, body.radii, body.settings,
+                            walkableNormalY(body.settings), scratch);
+      swapBodyCache(scratch, caches[i]);
+      body.position = slide.end;
+      recordSlide(reports.empty() ? nullptr : &reports[i], slide, false);
+    } else {
+      body.position = end;
     }
+    if (!reports.empty()) reports[i].bodyContacts += nearest.size();
   }
 }
 

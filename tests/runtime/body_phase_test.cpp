@@ -207,6 +207,34 @@ TEST_CASE(
 }
 
 TEST_CASE(
+    "bodies spawned along a line a few centimetres long are each pushed at most half their "
+    "deepest overlap in a frame, not the sum of all their shares",
+    "[runtime][movement]") {
+  const bspf::test::CompiledMesh level(bspf::test::boxMesh({-20, -1, -20}, {20, 0, 20}));
+  // Eight bodies 1 cm apart along x: each end body has all seven others on
+  // one side, and the halves of those overlaps (about 0.45 m each) summed
+  // would fling it 3 m in one frame.
+  std::vector<Body> bodies(8);
+  for (std::size_t k = 0; k < bodies.size(); ++k)
+    bodies[k].position = Vec3(0.01f * float(k), 0.851f, 0.3f);
+  const std::vector<Body> start = bodies;
+  const std::vector<Vec3> forces(bodies.size(), Vec3::Zero());
+  std::vector<bspf::StepReport> reports(bodies.size());
+  bspf::StepScratch scratch;
+  bspf::stepBodies(level.world, bodies, forces, kDt, scratch, reports);
+  const float deepestHalf = 0.5f * 2 * bodies[0].radii.xz + 0.5f * bodies[0].settings.skin;
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    INFO("body " << k);
+    REQUIRE(reports[k].bodyContacts == 7);
+    const Vec3 move = bodies[k].position - start[k].position;
+    REQUIRE(std::hypot(move.x(), move.z()) <= deepestHalf + 1e-4f);
+  }
+  // The end bodies still part outwards at once.
+  REQUIRE(bodies.front().position.x() < start.front().position.x() - 0.3f);
+  REQUIRE(bodies.back().position.x() > start.back().position.x() + 0.3f);
+}
+
+TEST_CASE(
     "a body overlapped by more than kMaxBodyPushes bodies is pushed by the nearest ones, "
     "not by the first found",
     "[runtime][movement]") {
@@ -237,6 +265,42 @@ TEST_CASE(
   // The deep overlap (0.6 m, half of it a push to +x) outweighs the shallow
   // ones (0.05 m each, pushing to -x): it must be among the pushers.
   REQUIRE(bodies[0].position.x() > centre.position.x() + 0.05f);
+}
+
+TEST_CASE(
+    "two bodies overlapping across a grid cell border, along any axis or across a corner, "
+    "push each other apart",
+    "[runtime][movement]") {
+  // Cells are 1.8 m wide (four radii) and 3.4 m tall, with borders at 0. A
+  // third body 10 km away makes the occupied cells' box too large for the
+  // occupancy bits, so both ways of finding a neighbour cell are used.
+  const bspf::test::CompiledMesh level(bspf::test::boxMesh({-20, -1, -20}, {20, 0, 20}));
+  const bool farBody = GENERATE(false, true);
+  const Vec3 offset = GENERATE(Vec3(0.5f, 0, 0), Vec3(0, 0, 0.5f), Vec3(0.4f, 0, 0.4f),
+                               Vec3(-0.5f, 0, 0), Vec3(0, 0, -0.5f), Vec3(-0.4f, 0, 0.4f));
+  INFO("offset " << offset.transpose() << (farBody ? ", a body 10 km away" : ""));
+  for (const float border : {0.0f, 1.8f, -1.8f}) {
+    INFO("border at " << border);
+    // Each centre 0.1 to 0.3 m from the border, on either side of it.
+    const Vec3 middle(border + 0.0123f, 0.851f, border - 0.0077f);
+    std::vector<Body> bodies(2);
+    bodies[0].position = middle - 0.5f * offset;
+    bodies[1].position = middle + 0.5f * offset;
+    if (farBody) {
+      bodies.emplace_back();
+      bodies.back().position = Vec3(10000, 0.851f, 0);
+    }
+    const std::vector<Body> start = bodies;
+    const std::vector<Vec3> forces(bodies.size(), Vec3::Zero());
+    std::vector<bspf::StepReport> reports(bodies.size());
+    bspf::StepScratch scratch;
+    bspf::stepBodies(level.world, bodies, forces, kDt, scratch, reports);
+    REQUIRE(reports[0].bodyContacts == 1);
+    REQUIRE(reports[1].bodyContacts == 1);
+    const Vec3 before = start[1].position - start[0].position;
+    const Vec3 after = bodies[1].position - bodies[0].position;
+    REQUIRE(after.norm() > before.norm() + 0.3f);
+  }
 }
 
 TEST_CASE(

@@ -23,8 +23,9 @@
 //   3. contacts update the velocity (slide or bounce) and the ground state.
 // stepBodies then pushes overlapping bodies apart, horizontally (hashed grid
 // broad phase, every push computed from the positions after the level phase,
-// at most kMaxBodyPushes pushers per body), each body's summed push itself
-// one move against the level, so a push never enters a wall.
+// at most kMaxBodyPushes pushers per body), each body's summed push (no
+// longer than its largest share) itself one move against the level, so a
+// push never enters a wall.
 //
 // Many cores: stepBodies with a ThreadPool (bspf/thread_pool.h) runs both
 // phases in parallel; a game with its own job system calls the phases itself
@@ -196,14 +197,19 @@ inline constexpr int kMaxBodyCandidates = 32;
 /// pushed apart from the overlapping bodies of `grid` (at most kMaxBodyPushes
 /// of them, the nearest): by half of each overlap (measured along the line
 /// between centres) plus half its skin, horizontally away from the other,
-/// all summed into one push that is a move against the level, so it never
-/// ends inside a wall. The velocity loses its horizontal closing speed
-/// towards each pusher. Pushes are horizontal so that a crowd never lifts a
-/// body (onto a wall's top, say): bodies do not stand on each other's heads.
-/// Two bodies at the same point, or one right above the other, part along a
-/// horizontal direction fixed by their pair of indices. Adds the push's
-/// contacts and the number of pushers (StepReport::bodyContacts) to
-/// `reports` (empty, or parallel to `bodies`).
+/// all summed into one push, never longer than the largest of these shares
+/// (in a pile the shares from one side would add up to a fling of metres).
+/// The push is a move against the level, so it never ends inside a wall (a
+/// push that stays more than a quarter of the skin clear of every
+/// triangle's plane, the common case, moves the body the whole way without
+/// a slide: the narrow phase would find nothing). The velocity loses its
+/// horizontal closing speed towards each pusher. Pushes are horizontal so
+/// that a crowd never lifts a body (onto a wall's top, say): bodies do not
+/// stand on each other's heads. Two bodies at the same point, or one right
+/// above the other, part along a horizontal direction fixed by their pair
+/// of indices. Adds the push's contacts and the number of pushers
+/// (StepReport::bodyContacts) to `reports` (empty, or parallel to
+/// `bodies`).
 /// Every push is computed from the positions `grid` was built from, not from
 /// bodies already pushed: the result does not depend on the order or the
 /// split of the ranges.
@@ -230,7 +236,7 @@ class BodyGrid {
   void build(std::span<const Body> bodies);
 
   /// Bodies in the last snapshot.
-  std::size_t size() const { return slotOf_.size(); }
+  std::size_t size() const { return places_.size(); }
 
  private:
   friend void detail::pushRange(const World&, const BodyGrid&, std::span<Body>, std::size_t,
@@ -246,22 +252,34 @@ class BodyGrid {
     std::uint32_t first;  ///< its entries: [first, first + count)
     std::uint32_t count;
   };
+  /// Where one body is in the snapshot, by body index.
+  struct Place {
+    std::uint64_t key;       ///< its cell's key
+    std::uint32_t entry;     ///< its entry in entries_
+    std::uint32_t cellSlot;  ///< its cell's slot in cells_
+    std::uint32_t bit;       ///< its cell's bit in occupied_ (when kept)
+    /// Bit a set: along axis a (x, y, z) it lies in the upper half of its
+    /// cell, so the neighbour that may hold an overlapping body is the one
+    /// above, else the one below.
+    std::uint8_t upperHalf;
+  };
   static constexpr std::uint64_t kFree = ~std::uint64_t(0);
-  /// The cell holding `position`, as integer coordinates; `nearerSide`, when
-  /// given, gets for each axis the neighbouring cell (-1 or +1) on the side
-  /// of the cell's middle the position lies.
-  std::array<std::int64_t, 3> cellOf(const Vec3& position,
-                                     std::array<int, 3>* nearerSide = nullptr) const;
-  /// A cell's coordinates packed into a table key.
-  static std::uint64_t keyOf(const std::array<std::int64_t, 3>& cell);
   /// The table slot of `key` when a body is in that cell, else of a free slot.
   std::uint32_t find(std::uint64_t key) const;
 
-  float cellWidth_ = 1, cellHeight_ = 1;
-  std::vector<Cell> cells_;              ///< open addressing, a power of 2 long
-  std::vector<Entry> entries_;           ///< by cell, body index order within a cell
-  std::vector<std::uint32_t> slotOf_;    ///< body index -> its entry
-  std::vector<std::uint32_t> cellSlot_;  ///< body index -> its slot in cells_
+  float inverseWidth_ = 1, inverseHeight_ = 1;  ///< 1 / cell size, horizontal and vertical
+  int shift_ = 60;                              ///< 64 - log2(cells_.size()), for the hash
+  std::vector<Cell> cells_;                     ///< open addressing, a power of 2 long
+  std::vector<Entry> entries_;                  ///< by cell, body index order within a cell
+  std::vector<Place> places_;                   ///< by body index
+  /// When the box of the occupied cells, grown by one cell on every side, is
+  /// small (a few hundred cells a body): a bit a cell of it, set where a
+  /// body is, so that most empty neighbours cost a bit test, not a hash
+  /// look-up. Empty when that box is too large.
+  std::vector<std::uint64_t> occupied_;
+  /// The bit offsets in occupied_ to a cell's 7 neighbours, by upperHalf (as
+  /// the key offsets; modulo 2^32).
+  std::array<std::array<std::uint32_t, 7>, 8> bitOffsets_{};
 };
 
 /// Per-thread scratch for the step. Reusable across worlds and frames; it
@@ -320,8 +338,9 @@ void stepBodiesAgainstLevel(const World& world, std::span<Body> bodies,
 
 /// Advances every body by `dt`: each against the level (stepBodiesAgainstLevel),
 /// then overlapping bodies are pushed apart (scratch.bodyGrid, then
-/// pushBodiesApart: each body by half of each overlap, horizontally, in one
-/// move against the level, so it never ends inside a wall). The broad phase
+/// pushBodiesApart: each body by half of each overlap, horizontally, summed
+/// but no longer than the largest half, in one move against the level, so
+/// it never ends inside a wall). The broad phase
 /// is a hashed grid and the pushers per body are capped (kMaxBodyPushes,
 /// kMaxBodyCandidates): the cost is linear in the number of bodies, even
 /// when they pile up at one point.
