@@ -21,6 +21,7 @@ enum class Check { Box, Planes, Exact };
 template <Check check>
 std::uint32_t scalarMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
                          const Vec3& end) {
+  // (No early exit on the block's box: the reference checks every lane.)
   std::uint32_t bits = 0;
   for (int i = 0; i < kBlockLanes; ++i) {
     bool keep = block.lowX[i] <= box.high.x() && box.low.x() <= block.highX[i] &&
@@ -50,6 +51,7 @@ std::uint32_t scalarMask(const CandidateBlock& block, const Bounds& box, const V
 template <Check check>
 std::uint32_t sseMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
                       const Vec3& end) {
+  if (!boxesOverlap(block.low, block.high, box.low, box.high)) return 0;
   const __m128 lx = _mm_set1_ps(box.low.x()), ly = _mm_set1_ps(box.low.y()),
                lz = _mm_set1_ps(box.low.z());
   const __m128 hx = _mm_set1_ps(box.high.x()), hy = _mm_set1_ps(box.high.y()),

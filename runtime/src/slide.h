@@ -103,6 +103,7 @@ class LocalCandidates {
     }
     if (count % detail::kBlockLanes != 0)
       detail::clearLanes(listed_.back(), int(count % detail::kBlockLanes));
+    for (detail::CandidateBlock& block : listed_) detail::sealBlock(block);
     scratch.workspace().lastCount = count;
     return current_ = listed_;
   }
@@ -130,6 +131,7 @@ class LocalCandidates {
     }
     if (sorted_.size() % detail::kBlockLanes != 0)
       detail::clearLanes(made_.blocks.back(), int(sorted_.size() % detail::kBlockLanes));
+    for (detail::CandidateBlock& block : made_.blocks) detail::sealBlock(block);
     made_.query = nearby.queryId();
     made_.radii = radii;
   }

@@ -88,7 +88,7 @@ inline constexpr int kBlockLanes = 8;
 /// A scan reads these few cache lines and tests a whole block with a few
 /// SSE instructions (planesMask and the like); the rest of a candidate
 /// (Cold in MadeCandidates) is read only for the few that pass. Unused lanes have an empty box
-/// (low > high), which no box overlaps.
+/// (low +infinity, high -infinity), which no box overlaps.
 struct alignas(32) CandidateBlock {
   float lowX[kBlockLanes], lowY[kBlockLanes], lowZ[kBlockLanes];
   float highX[kBlockLanes], highY[kBlockLanes], highZ[kBlockLanes];
@@ -96,7 +96,22 @@ struct alignas(32) CandidateBlock {
   float distance[kBlockLanes], reach[kBlockLanes];
   /// Index of the candidate in MadeCandidates::cold.
   std::uint32_t slot[kBlockLanes];
+  /// The box around every used lane's box (sealBlock): a scan skips a
+  /// block whose box misses its own with one scalar test.
+  Vec3 low, high;
 };
+
+/// Sets `block`'s box from its used lanes (those with low <= high). Call
+/// once its lanes are written.
+inline void sealBlock(CandidateBlock& block) {
+  block.low = Vec3::Constant(std::numeric_limits<float>::infinity());
+  block.high = -block.low;
+  for (int lane = 0; lane < kBlockLanes; ++lane) {
+    if (!(block.lowX[lane] <= block.highX[lane])) continue;
+    block.low = block.low.cwiseMin(Vec3(block.lowX[lane], block.lowY[lane], block.lowZ[lane]));
+    block.high = block.high.cwiseMax(Vec3(block.highX[lane], block.highY[lane], block.highZ[lane]));
+  }
+}
 
 /// Writes candidate `slot` (its box and face test) into lane `lane`.
 inline void setLane(CandidateBlock& block, int lane, const Vec3& low, const Vec3& high,
@@ -122,8 +137,11 @@ inline void copyLane(const CandidateBlock& source, int from, CandidateBlock& tar
 /// Empties lanes [from, kBlockLanes) of `block`.
 inline void clearLanes(CandidateBlock& block, int from) {
   for (int lane = from; lane < kBlockLanes; ++lane) {
-    block.lowX[lane] = block.lowY[lane] = block.lowZ[lane] = 1;
-    block.highX[lane] = block.highY[lane] = block.highZ[lane] = -1;
+    // Infinitely inverted: low > high alone is not enough, as [1, -1]
+    // would still pass the overlap test against a box holding [-1, 1].
+    constexpr float kInfinity = std::numeric_limits<float>::infinity();
+    block.lowX[lane] = block.lowY[lane] = block.lowZ[lane] = kInfinity;
+    block.highX[lane] = block.highY[lane] = block.highZ[lane] = -kInfinity;
     block.normalX[lane] = block.normalY[lane] = block.normalZ[lane] = 0;
     block.distance[lane] = block.reach[lane] = 0;
     block.slot[lane] = 0;

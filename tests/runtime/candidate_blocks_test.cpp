@@ -38,6 +38,7 @@ CandidateBlock randomBlock(std::mt19937& rng, int used) {
     bspf::detail::setLane(block, lane, a.cwiseMin(b), a.cwiseMax(b), face, std::uint32_t(lane));
   }
   bspf::detail::clearLanes(block, used);
+  bspf::detail::sealBlock(block);
   return block;
 }
 
@@ -79,6 +80,7 @@ TEST_CASE("a block mask keeps exactly the lanes whose box and side values pass")
   bspf::detail::setLane(block, 1, low + Vec3(5, 0, 0), high + Vec3(5, 0, 0), floor, 1);  // far
   bspf::detail::setLane(block, 2, low, high, {-Vec3::UnitY(), 0.0f, 0.85f}, 2);  // facing down
   bspf::detail::clearLanes(block, 3);
+  bspf::detail::sealBlock(block);
   const Bounds swept{Vec3(-0.5f, -0.1f, -0.5f), Vec3(0.5f, 1.8f, 0.5f)};
   const Vec3 start(0, 0.9f, 0), end(0, 0.8f, 0);  // a body settling onto the floor
 
@@ -91,6 +93,9 @@ TEST_CASE("a block mask keeps exactly the lanes whose box and side values pass")
   CHECK(bspf::detail::planesMask(block, swept, Vec3(0, 0.9f, 0), Vec3(0, 1.0f, 0)) == 0u);
   // The exact sweep keeps a path that starts within reach.
   CHECK(bspf::detail::exactMask(block, swept, Vec3(0, 0.8f, 0), Vec3(0, 1.0f, 0)) == 0b001u);
+  // Unused lanes never pass, even for a box around everything.
+  CHECK(bspf::detail::boxMask(block, {Vec3::Constant(-100), Vec3::Constant(100)}) == 0b111u);
+  CHECK(bspf::detail::scalarBoxMask(block, {Vec3::Constant(-100), Vec3::Constant(100)}) == 0b111u);
   // A box merely touching the lane's box counts.
   CHECK(bspf::detail::boxMask(block, {Vec3(1, 0, 1), Vec3(2, 1, 2)}) == 0b101u);
 }
