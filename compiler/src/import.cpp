@@ -13,6 +13,8 @@
 #include <cstring>
 #include <fstream>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 namespace bspc {
 
@@ -39,27 +41,40 @@ Eigen::Matrix4d sourceToLevel(const ImportSettings& settings) {
   return m;
 }
 
-void appendNode(const aiScene& scene, const aiNode& node, const Eigen::Matrix4d& parent,
-                Mesh& out) {
-  const Eigen::Matrix4d transform = parent * toEigen(node.mTransformation);
-  for (unsigned i = 0; i < node.mNumMeshes; ++i) {
-    const aiMesh& mesh = *scene.mMeshes[node.mMeshes[i]];
-    if (!(mesh.mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
-    const auto base = static_cast<std::uint32_t>(out.vertices.size());
-    for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
-      const aiVector3D& p = mesh.mVertices[v];
-      const Eigen::Vector4d q = transform * Eigen::Vector4d(p.x, p.y, p.z, 1.0);
-      out.vertices.emplace_back(q.head<3>());
+// Appends every mesh of the scene's node tree, each vertex moved by its
+// node's whole transform (`root` first). The tree is walked with a stack of
+// our own, depth first in the order recursion would take, so a chain of
+// nodes thousands deep cannot overflow bspc's stack. A transform that
+// mirrors (negative determinant, as an FBX negative scale makes) turns a
+// triangle inside out: it is written with two corners swapped, so it faces
+// the way its mirrored surface does.
+void appendScene(const aiScene& scene, const Eigen::Matrix4d& root, Mesh& out) {
+  std::vector<std::pair<const aiNode*, Eigen::Matrix4d>> pending{{scene.mRootNode, root}};
+  while (!pending.empty()) {
+    const auto [node, parent] = pending.back();
+    pending.pop_back();
+    const Eigen::Matrix4d transform = parent * toEigen(node->mTransformation);
+    const bool mirrors = transform.topLeftCorner<3, 3>().determinant() < 0;
+    for (unsigned i = 0; i < node->mNumMeshes; ++i) {
+      const aiMesh& mesh = *scene.mMeshes[node->mMeshes[i]];
+      if (!(mesh.mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
+      const auto base = static_cast<std::uint32_t>(out.vertices.size());
+      for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
+        const aiVector3D& p = mesh.mVertices[v];
+        const Eigen::Vector4d q = transform * Eigen::Vector4d(p.x, p.y, p.z, 1.0);
+        out.vertices.emplace_back(q.head<3>());
+      }
+      for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+        const aiFace& face = mesh.mFaces[f];
+        if (face.mNumIndices != 3) continue;
+        const std::uint32_t second = face.mIndices[mirrors ? 2 : 1];
+        const std::uint32_t third = face.mIndices[mirrors ? 1 : 2];
+        out.triangles.push_back({base + face.mIndices[0], base + second, base + third});
+      }
     }
-    for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
-      const aiFace& face = mesh.mFaces[f];
-      if (face.mNumIndices != 3) continue;
-      out.triangles.push_back(
-          {base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
-    }
+    for (unsigned c = node->mNumChildren; c-- > 0;)
+      pending.emplace_back(node->mChildren[c], transform);
   }
-  for (unsigned c = 0; c < node.mNumChildren; ++c)
-    appendNode(scene, *node.mChildren[c], transform, out);
 }
 
 // assimp's file access, except that it opens only regular files for reading,
@@ -127,7 +142,7 @@ Mesh importMesh(const std::filesystem::path& path, const ImportSettings& setting
     throw CompileError("cannot import: " + why);
   }
   Mesh mesh;
-  appendNode(*scene, *scene->mRootNode, sourceToLevel(settings), mesh);
+  appendScene(*scene, sourceToLevel(settings), mesh);
   if (mesh.triangles.empty()) throw CompileError("the scene holds no triangles");
   return mesh;
 }

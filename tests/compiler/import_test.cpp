@@ -1,0 +1,76 @@
+// bspc's import stage (compiler/src/import.cpp): node transforms.
+#include <bspc/import.h>
+
+#include <catch2/catch.hpp>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "support/test_support.h"
+
+namespace {
+
+// A glTF 2.0 scene of one triangle facing +Y, (0,0,0) (0,0,1) (1,0,0),
+// placed by two nodes: as it is, and with `secondNode` (a JSON node's
+// transform properties).
+std::filesystem::path writeTwoNodeGltf(const std::string& tag, const std::string& secondNode) {
+  const std::filesystem::path dir = bspf::test::freshTempDir(tag);
+  const float positions[9] = {0, 0, 0, 0, 0, 1, 1, 0, 0};
+  const std::uint16_t indices[4] = {0, 1, 2, 0};  // the last pads to 4 bytes
+  std::vector<char> bytes(sizeof positions + sizeof indices);
+  std::memcpy(bytes.data(), positions, sizeof positions);
+  std::memcpy(bytes.data() + sizeof positions, indices, sizeof indices);
+  std::ofstream(dir / "triangle.bin", std::ios::binary).write(bytes.data(), bytes.size());
+  std::ofstream(dir / "scene.gltf") << R"({
+  "asset": {"version": "2.0"},
+  "scene": 0,
+  "scenes": [{"nodes": [0, 1]}],
+  "nodes": [{"mesh": 0}, {"mesh": 0, )"
+                                    << secondNode << R"(}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+  "buffers": [{"uri": "triangle.bin", "byteLength": 44}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                  {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+  "accessors": [
+    {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+     "min": [0, 0, 0], "max": [1, 0, 1]},
+    {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}]
+})";
+  return dir / "scene.gltf";
+}
+
+Eigen::Vector3d faceNormal(const bspc::Mesh& mesh, std::size_t t) {
+  const auto& tri = mesh.triangles[t];
+  const Eigen::Vector3d a = mesh.vertices[tri[0]], b = mesh.vertices[tri[1]],
+                        c = mesh.vertices[tri[2]];
+  return (b - a).cross(c - a).normalized();
+}
+
+}  // namespace
+
+TEST_CASE("a mirroring node transform keeps its triangles facing the way their surface does",
+          "[compiler][import]") {
+  for (const std::string mirror :
+       {R"("scale": [-1, 1, 1], "translation": [5, 0, 0])", R"("scale": [1, 1, -1])",
+        R"("matrix": [1,0,0,0, 0,1,0,0, 0,0,-2,0, 3,0,0,1])"}) {
+    INFO(mirror);
+    const bspc::Mesh mesh = bspc::importMesh(writeTwoNodeGltf("import-mirror", mirror), {});
+    REQUIRE(mesh.triangles.size() == 2);
+    // Mirrored in x or z, a floor triangle is still a floor facing up.
+    CHECK(faceNormal(mesh, 0).isApprox(Eigen::Vector3d::UnitY()));
+    CHECK(faceNormal(mesh, 1).isApprox(Eigen::Vector3d::UnitY()));
+  }
+}
+
+TEST_CASE("a node transform that does not mirror keeps the file's winding", "[compiler][import]") {
+  // Turned upside down by a rotation of 180 degrees about x (not a mirror):
+  // the triangle then faces down, as the file says.
+  const bspc::Mesh mesh = bspc::importMesh(
+      writeTwoNodeGltf("import-rotate", R"("rotation": [1, 0, 0, 0], "translation": [0, 2, 0])"),
+      {});
+  REQUIRE(mesh.triangles.size() == 2);
+  CHECK(faceNormal(mesh, 0).isApprox(Eigen::Vector3d::UnitY()));
+  CHECK(faceNormal(mesh, 1).isApprox(-Eigen::Vector3d::UnitY()));
+}
