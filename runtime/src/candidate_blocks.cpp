@@ -4,12 +4,7 @@
 // elsewhere, or with BSPF_SCALAR_MASKS defined, a plain loop that computes
 // the same bits with the same float operations in the same order. The tests
 // run both and compare them (tests/runtime/candidate_blocks_test.cpp).
-#include "workspace.h"
-
-#if (defined(__SSE2__) || defined(_M_X64) || defined(_M_AMD64)) && !defined(BSPF_SCALAR_MASKS)
-#include <emmintrin.h>
-#define BSPF_SSE_MASKS 1
-#endif
+#include "workspace.h"  // defines BSPF_SSE_MASKS where SSE2 is used
 
 namespace bspf::detail {
 

@@ -101,9 +101,7 @@ class LocalCandidates {
         ++count;
       }
     }
-    if (count % detail::kBlockLanes != 0)
-      detail::clearLanes(listed_.back(), int(count % detail::kBlockLanes));
-    for (detail::CandidateBlock& block : listed_) detail::sealBlock(block);
+    detail::finishBlocks(listed_, count);
     scratch.workspace().lastCount = count;
     return current_ = listed_;
   }
@@ -129,9 +127,7 @@ class LocalCandidates {
                       c.low, c.high, make_(c.triangle), slot);
       made_.cold[slot].reset(c.triangle);
     }
-    if (sorted_.size() % detail::kBlockLanes != 0)
-      detail::clearLanes(made_.blocks.back(), int(sorted_.size() % detail::kBlockLanes));
-    for (detail::CandidateBlock& block : made_.blocks) detail::sealBlock(block);
+    detail::finishBlocks(made_.blocks, sorted_.size());
     made_.query = nearby.queryId();
     made_.radii = radii;
   }

@@ -18,8 +18,12 @@
 
 #include "narrow_phase.h"
 
+// SSE2 is part of every x86-64 CPU's baseline, so the block tests use it
+// without a run-time dispatch; elsewhere (or with BSPF_SCALAR_MASKS defined)
+// they run their scalar references.
 #if (defined(__SSE2__) || defined(_M_X64) || defined(_M_AMD64)) && !defined(BSPF_SCALAR_MASKS)
 #include <emmintrin.h>
+#define BSPF_SSE_MASKS 1
 #endif
 
 namespace bspf::detail {
@@ -53,7 +57,7 @@ struct alignas(16) GrownTriangle {
   /// float operations in the same order as insideOneByOne (the tests
   /// compare them).
   bool inside(const Vec3& p) const {
-#if (defined(__SSE2__) || defined(_M_X64) || defined(_M_AMD64)) && !defined(BSPF_SCALAR_MASKS)
+#ifdef BSPF_SSE_MASKS
     const __m128 x = _mm_set1_ps(p.x()), y = _mm_set1_ps(p.y()), z = _mm_set1_ps(p.z());
     int outside = 0;
     for (int first = 0; first < 8; first += 4) {
@@ -146,6 +150,13 @@ inline void clearLanes(CandidateBlock& block, int from) {
     block.distance[lane] = block.reach[lane] = 0;
     block.slot[lane] = 0;
   }
+}
+
+/// Empties the lanes after the first `count` candidates of `blocks` (laid
+/// out in order, kBlockLanes a block) and seals every block (sealBlock).
+inline void finishBlocks(std::span<CandidateBlock> blocks, std::size_t count) {
+  if (count % kBlockLanes != 0) clearLanes(blocks.back(), int(count % kBlockLanes));
+  for (CandidateBlock& block : blocks) sealBlock(block);
 }
 
 /// Bit i set when lane i's box overlaps `box` (touching counts).
