@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <mutex>
 #include <random>
 #include <sstream>
 
@@ -54,12 +55,44 @@ bspf::World compileSample(const std::string& name) {
   return *opened.world;
 }
 
+namespace {
+
+// The directories freshTempDir made, removed when the test program exits
+// (every run used to leave hundreds in /tmp), unless BSPF_KEEP_TEST_DIRS is
+// set for a post-mortem.
+class TempDirs {
+ public:
+  void add(const std::filesystem::path& dir) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    dirs_.push_back(dir);
+  }
+  ~TempDirs() {
+    if (std::getenv("BSPF_KEEP_TEST_DIRS")) return;
+    std::error_code ignored;  // a directory a test removed itself is fine
+    for (const std::filesystem::path& dir : dirs_) std::filesystem::remove_all(dir, ignored);
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::filesystem::path> dirs_;
+};
+
+}  // namespace
+
 std::filesystem::path freshTempDir(const std::string& tag) {
+  static TempDirs made;
   static std::mt19937_64 rng(std::random_device{}());
+  static std::mutex rngMutex;
+  std::uint64_t draw;
+  {
+    const std::lock_guard<std::mutex> lock(rngMutex);
+    draw = rng();
+  }
   const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("bspf-test-" + tag + "-" + std::to_string(rng() % 1000000000));
+                                    ("bspf-test-" + tag + "-" + std::to_string(draw % 1000000000));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
+  made.add(dir);
   return dir;
 }
 

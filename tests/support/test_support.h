@@ -70,8 +70,9 @@ struct CompiledMesh {
 /// and opens it (the World keeps its mapping alive).
 bspf::World compileSample(const std::string& name);
 
-/// A fresh empty directory under the system temp dir, removed by the caller
-/// when it likes (tests leave it for post-mortems).
+/// A fresh empty directory under the system temp dir, removed with
+/// everything in it when the test program exits (kept when the environment
+/// variable BSPF_KEEP_TEST_DIRS is set, for post-mortems).
 std::filesystem::path freshTempDir(const std::string& tag);
 
 /// Runs a shell command; returns its exit status and stderr.
