@@ -15,7 +15,7 @@ enum class Check { Box, Planes, Exact };
 // The reference: one lane at a time.
 template <Check check>
 std::uint32_t scalarMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
-                         const Vec3& end) {
+                         const Vec3& end, LaneSides* sides) {
   // (No early exit on the block's box: the reference checks every lane.)
   std::uint32_t bits = 0;
   for (int i = 0; i < kBlockLanes; ++i) {
@@ -29,9 +29,10 @@ std::uint32_t scalarMask(const CandidateBlock& block, const Bounds& box, const V
                               block.normalZ[i] * start.z() - block.distance[i];
       const float endSide = block.normalX[i] * end.x() + block.normalY[i] * end.y() +
                             block.normalZ[i] * end.z() - block.distance[i];
-      if constexpr (check == Check::Planes)
+      if constexpr (check == Check::Planes) {
         keep = keep && endSide < block.reach[i] && startSide >= 0;
-      else
+        sides->start[i] = startSide, sides->end[i] = endSide;
+      } else
         keep = keep && startSide >= -1e-5f &&
                (startSide <= block.reach[i] || endSide <= block.reach[i]);
     }
@@ -45,7 +46,7 @@ std::uint32_t scalarMask(const CandidateBlock& block, const Bounds& box, const V
 // or zeros; movemask packs the lanes' sign bits into the result.
 template <Check check>
 std::uint32_t sseMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
-                      const Vec3& end) {
+                      const Vec3& end, LaneSides* sides) {
   if (!boxesOverlap(block.low, block.high, box.low, box.high)) return 0;
   const __m128 lx = _mm_set1_ps(box.low.x()), ly = _mm_set1_ps(box.low.y()),
                lz = _mm_set1_ps(box.low.z());
@@ -74,6 +75,8 @@ std::uint32_t sseMask(const CandidateBlock& block, const Bounds& box, const Vec3
       if constexpr (check == Check::Planes) {
         keep = _mm_and_ps(keep, _mm_and_ps(_mm_cmplt_ps(endSide, reach),
                                            _mm_cmpge_ps(startSide, _mm_setzero_ps())));
+        _mm_store_ps(sides->start + first, startSide);
+        _mm_store_ps(sides->end + first, endSide);
       } else {
         const __m128 inReach =
             _mm_or_ps(_mm_cmple_ps(startSide, reach), _mm_cmple_ps(endSide, reach));
@@ -88,11 +91,11 @@ std::uint32_t sseMask(const CandidateBlock& block, const Bounds& box, const Vec3
 
 template <Check check>
 std::uint32_t mask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
-                   const Vec3& end) {
+                   const Vec3& end, LaneSides* sides = nullptr) {
 #ifdef BSPF_SSE_MASKS
-  return sseMask<check>(block, box, start, end);
+  return sseMask<check>(block, box, start, end, sides);
 #else
-  return scalarMask<check>(block, box, start, end);
+  return scalarMask<check>(block, box, start, end, sides);
 #endif
 }
 
@@ -103,8 +106,8 @@ std::uint32_t boxMask(const CandidateBlock& block, const Bounds& box) {
 }
 
 std::uint32_t planesMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
-                         const Vec3& end) {
-  return mask<Check::Planes>(block, box, start, end);
+                         const Vec3& end, LaneSides& sides) {
+  return mask<Check::Planes>(block, box, start, end, &sides);
 }
 
 std::uint32_t exactMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
@@ -113,17 +116,17 @@ std::uint32_t exactMask(const CandidateBlock& block, const Bounds& box, const Ve
 }
 
 std::uint32_t scalarBoxMask(const CandidateBlock& block, const Bounds& box) {
-  return scalarMask<Check::Box>(block, box, Vec3::Zero(), Vec3::Zero());
+  return scalarMask<Check::Box>(block, box, Vec3::Zero(), Vec3::Zero(), nullptr);
 }
 
 std::uint32_t scalarPlanesMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
-                               const Vec3& end) {
-  return scalarMask<Check::Planes>(block, box, start, end);
+                               const Vec3& end, LaneSides& sides) {
+  return scalarMask<Check::Planes>(block, box, start, end, &sides);
 }
 
 std::uint32_t scalarExactMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
                               const Vec3& end) {
-  return scalarMask<Check::Exact>(block, box, start, end);
+  return scalarMask<Check::Exact>(block, box, start, end, nullptr);
 }
 
 }  // namespace bspf::detail

@@ -41,22 +41,24 @@ namespace detail {
 // triangle's corners loses the contact to cancellation in float.
 void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best,
                     bool& penetrating) {
-  if (faceImpact(tri, pf, vf, best, penetrating) < best.time) edgeImpact(tri, pf, vf, best);
+  const SpherePath path(pf, vf);
+  const TriangleD triangle(tri);
+  if (faceImpact(triangle, path, best, penetrating) < best.time) edgeImpact(triangle, path, best);
 }
 
-double faceImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best,
-                  bool& penetrating) {
+double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bool& penetrating) {
   using V = Eigen::Vector3d;
   constexpr double kSettled = std::numeric_limits<double>::infinity();
-  const V p = pf.cast<double>(), v = vf.cast<double>(), n = tri.normal.cast<double>();
-  const V a = tri.a.cast<double>() - p;  // relative to the start
+  const V& p = path.start;
+  const V& v = path.move;
+  const V& n = tri.normal;
+  const V a = tri.a - p;  // relative to the start
   const double startSide = -n.dot(a);
   if (startSide < 0) return kSettled;  // behind: one-sided
   if (startSide < 1) {
     // Already within reach (recovery could not clear it all): never let the
     // move go deeper. Moving towards the closest point is an impact now.
-    const V closest =
-        closestPointOnTriangle<V>(V::Zero(), a, tri.b.cast<double>() - p, tri.c.cast<double>() - p);
+    const V closest = closestPointOnTriangle<V>(V::Zero(), a, tri.b - p, tri.c - p);
     const double distance = closest.norm();
     if (distance < 1) {
       penetrating = true;
@@ -78,24 +80,24 @@ double faceImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& b
   const double t = (startSide - 1) / -approach;
   if (t > 1) return kSettled;
   if (t < best.time) {
-    const V corners[3] = {a, tri.b.cast<double>() - p, tri.c.cast<double>() - p};
+    const V corners[3] = {a, tri.b - p, tri.c - p};
     const V touch = t * v - n;
     bool inside = true;
     for (int k = 0; k < 3 && inside; ++k)
       inside = n.dot((corners[(k + 1) % 3] - corners[k]).cross(touch - corners[k])) >= 0;
     if (inside) {
-      best = {float(t), tri.normal};
+      best = {float(t), n.cast<float>()};
       return kSettled;
     }
   }
   return t;
 }
 
-void edgeImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best) {
+void edgeImpact(const TriangleD& tri, const SpherePath& path, Impact& best) {
   using V = Eigen::Vector3d;
-  const V p = pf.cast<double>(), v = vf.cast<double>();
-  const V corners[3] = {tri.a.cast<double>() - p, tri.b.cast<double>() - p,
-                        tri.c.cast<double>() - p};  // relative to the start
+  const V& p = path.start;
+  const V& v = path.move;
+  const V corners[3] = {tri.a - p, tri.b - p, tri.c - p};  // relative to the start
   for (int k = 0; k < 3; ++k) {
     // Edge k: the infinite cylinder of radius 1 around it, then the segment.
     const V& e0 = corners[k];
@@ -158,16 +160,20 @@ class ExactCandidates : public LocalCandidates<detail::ExactCold, Make> {
         world_(world),
         toSphere_(toSphere) {}
 
-  const Triangle& sphere(std::uint32_t slot) {
+  const Triangle& sphere(std::uint32_t slot) { return made(slot).sphere; }
+  const detail::TriangleD& sphereD(std::uint32_t slot) { return made(slot).sphereD; }
+
+ private:
+  detail::ExactCold& made(std::uint32_t slot) {
     detail::ExactCold& cold = (*this)[slot];
     if (!cold.ready) {
       cold.sphere = sphereSpaceTriangle(world_, cold.triangle, toSphere_);
+      cold.sphereD = detail::TriangleD(cold.sphere);
       cold.ready = true;
     }
-    return cold.sphere;
+    return cold;
   }
 
- private:
   const World& world_;
   Vec3 toSphere_;
 };
@@ -250,17 +256,18 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     // and could come before the earliest impact found so far: on the
     // ground, the face under the body settles its neighbours.
     open.clear();
+    const detail::SpherePath path(p, move);
     for (const detail::CandidateBlock& block :
          local.around(world, swept, moveLength, radii, scratch)) {
       for (std::uint32_t bits = detail::exactMask(block, swept, from, to); bits != 0;
            bits &= bits - 1) {
         const std::uint32_t slot = block.slot[std::countr_zero(bits)];
-        const double earliest = faceImpact(local.sphere(slot), p, move, impact, penetrating);
+        const double earliest = faceImpact(local.sphereD(slot), path, impact, penetrating);
         if (earliest < 1) open.push_back({earliest, slot});
       }
     }
     for (const auto& [earliest, slot] : open)
-      if (earliest < impact.time) edgeImpact(local.sphere(slot), p, move, impact);
+      if (earliest < impact.time) edgeImpact(local.sphereD(slot), path, impact);
     // A start in penetration (pushed there by another body, or placed there)
     // is first moved out, then the sweep is made again from there.
     if (penetrating && iteration == 0 && !recovered) {

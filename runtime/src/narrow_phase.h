@@ -57,6 +57,26 @@ struct Triangle {
 void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best,
                     bool& penetrating);
 
+// A sphere-space triangle in double, as both stages below read it: made once
+// per candidate (the conversion is exact) rather than once per test.
+struct TriangleD {
+  Eigen::Vector3d a, b, c, normal;
+  explicit TriangleD(const Triangle& t)
+      : a(t.a.cast<double>()),
+        b(t.b.cast<double>()),
+        c(t.c.cast<double>()),
+        normal(t.normal.cast<double>()) {}
+  TriangleD() = default;
+};
+
+// A sweep's start point and move in sphere space, in double: what both
+// stages below compute with, converted once per scan rather than once per
+// candidate.
+struct SpherePath {
+  Eigen::Vector3d start, move;
+  SpherePath(const Vec3& p, const Vec3& v) : start(p.cast<double>()), move(v.cast<double>()) {}
+};
+
 // earliestImpact's first stage: a start behind the triangle (no impact),
 // within the unit distance of it (penetration), and a first touch inside the
 // face. Returns the time (fraction of the move) before which no edge or
@@ -64,11 +84,10 @@ void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact&
 // reach of the plane but not of the triangle, the time to cover the gap;
 // infinity when no edge or corner can be touched within the move or improve
 // on `best`.
-double faceImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best,
-                  bool& penetrating);
+double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bool& penetrating);
 
 // earliestImpact's second stage: the edges and corners.
-void edgeImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact& best);
+void edgeImpact(const TriangleD& tri, const SpherePath& path, Impact& best);
 
 /// Triangle `t` of `world` scaled by `toSphere` into sphere space, with its
 /// unit normal.

@@ -35,18 +35,18 @@ Hit findBlockingTriangle(const World& world, const Vec3& start, const Vec3& end,
   const float moveLength = move.norm();
   const Vec3 direction = moveLength > 0 ? Vec3(move / moveLength) : Vec3::Zero();
   Hit best;
+  detail::LaneSides sides;
   for (const detail::CandidateBlock& block : blocks) {
     // The cheap tests for the whole block at once (the box, then the
-    // pre-check's two dot products); the six planes only for the few
-    // lanes that pass.
-    for (std::uint32_t bits = detail::planesMask(block, swept, start, end); bits != 0;
+    // pre-check's two dot products, whose values it keeps); the six planes
+    // only for the few lanes that pass (about 4 a scan on the shared
+    // levels, most of them beside the triangle the body touches).
+    for (std::uint32_t bits = detail::planesMask(block, swept, start, end, sides); bits != 0;
          bits &= bits - 1) {
       const int lane = std::countr_zero(bits);
       detail::PlanesCold& candidate = local[block.slot[lane]];
-      const Vec3 normal(block.normalX[lane], block.normalY[lane], block.normalZ[lane]);
       const float reach = block.reach[lane];
-      const float startSide = normal.dot(start) - block.distance[lane];
-      const float endSide = normal.dot(end) - block.distance[lane];
+      const float startSide = sides.start[lane], endSide = sides.end[lane];
       if (!candidate.grown.ready)
         detail::growPlanes(world, candidate.triangle, radii, candidate.grown);
       // Test the six planes where the centre crosses the offset plane (the
@@ -61,6 +61,7 @@ Hit findBlockingTriangle(const World& world, const Vec3& start, const Vec3& end,
         inside = candidate.grown.inside(start) || candidate.grown.inside(end);
       }
       if (!inside) continue;
+      const Vec3 normal(block.normalX[lane], block.normalY[lane], block.normalZ[lane]);
       const float facing = normal.dot(direction);
       const std::uint32_t t = candidate.triangle;
       if (!best.found() || facing < best.facing || (facing == best.facing && t < best.triangle))

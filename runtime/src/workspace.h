@@ -161,10 +161,17 @@ inline void finishBlocks(std::span<CandidateBlock> blocks, std::size_t count) {
 
 /// Bit i set when lane i's box overlaps `box` (touching counts).
 std::uint32_t boxMask(const CandidateBlock& block, const Bounds& box);
+/// The side values planesMask computed: lane i's signed distances, metres,
+/// of the move's start and end to its face plane. Valid for the lanes whose
+/// bit it set (the slide reads them rather than computing them again).
+struct alignas(16) LaneSides {
+  float start[kBlockLanes], end[kBlockLanes];
+};
 /// Bit i set when lane i's box overlaps `box` and it passes the planes
-/// method's pre-check (passesPreCheck) for the move start -> end.
+/// method's pre-check (passesPreCheck) for the move start -> end; `sides`
+/// receives the side values.
 std::uint32_t planesMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
-                         const Vec3& end);
+                         const Vec3& end, LaneSides& sides);
 /// Bit i set when lane i's box overlaps `box` and it passes the exact
 /// sweep's pre-check for the move start -> end: the path comes within reach
 /// of the plane, and starts at most 1e-5 m behind it.
@@ -175,7 +182,7 @@ std::uint32_t exactMask(const CandidateBlock& block, const Bounds& box, const Ve
 /// without SSE.
 std::uint32_t scalarBoxMask(const CandidateBlock& block, const Bounds& box);
 std::uint32_t scalarPlanesMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
-                               const Vec3& end);
+                               const Vec3& end, LaneSides& sides);
 std::uint32_t scalarExactMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
                               const Vec3& end);
 
@@ -197,6 +204,7 @@ struct ExactCold {
   std::uint32_t triangle;
   bool ready = false;
   Triangle sphere;
+  TriangleD sphereD;  ///< `sphere` in double, for the sweep's two stages
   /// Makes this triangle `t`'s, not yet in sphere space.
   void reset(std::uint32_t t) {
     triangle = t;

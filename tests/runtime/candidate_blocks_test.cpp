@@ -54,11 +54,22 @@ TEST_CASE("the SSE block masks give the same bits as the one-lane reference") {
     if (round % 5 == 0) box.low.x() = block.highX[0];  // touching
     const Vec3 start = randomPoint(rng, 4), end = randomPoint(rng, 4);
     const std::uint32_t boxBits = bspf::detail::boxMask(block, box);
-    const std::uint32_t planesBits = bspf::detail::planesMask(block, box, start, end);
+    bspf::detail::LaneSides sides, scalarSides;
+    const std::uint32_t planesBits = bspf::detail::planesMask(block, box, start, end, sides);
     const std::uint32_t exactBits = bspf::detail::exactMask(block, box, start, end);
     INFO("round " << round);
     REQUIRE(boxBits == bspf::detail::scalarBoxMask(block, box));
-    REQUIRE(planesBits == bspf::detail::scalarPlanesMask(block, box, start, end));
+    REQUIRE(planesBits == bspf::detail::scalarPlanesMask(block, box, start, end, scalarSides));
+    // The side values the slide reads for the lanes that pass: the same
+    // bits, and the distances of start and end to the lane's plane.
+    for (std::uint32_t bits = planesBits; bits != 0; bits &= bits - 1) {
+      const int lane = std::countr_zero(bits);
+      REQUIRE(sides.start[lane] == scalarSides.start[lane]);
+      REQUIRE(sides.end[lane] == scalarSides.end[lane]);
+      const Vec3 normal(block.normalX[lane], block.normalY[lane], block.normalZ[lane]);
+      REQUIRE(sides.start[lane] == Approx(normal.dot(start) - block.distance[lane]).margin(1e-5));
+      REQUIRE(sides.end[lane] == Approx(normal.dot(end) - block.distance[lane]).margin(1e-5));
+    }
     REQUIRE(exactBits == bspf::detail::scalarExactMask(block, box, start, end));
     REQUIRE((planesBits & ~boxBits) == 0);
     REQUIRE((exactBits & ~boxBits) == 0);
@@ -87,10 +98,13 @@ TEST_CASE("a block mask keeps exactly the lanes whose box and side values pass")
   CHECK(bspf::detail::boxMask(block, swept) == 0b101u);
   // Planes: the end within reach of the floor, the start in front of it;
   // the downward-facing plane has the start behind it.
-  CHECK(bspf::detail::planesMask(block, swept, start, end) == 0b001u);
+  bspf::detail::LaneSides sides;
+  CHECK(bspf::detail::planesMask(block, swept, start, end, sides) == 0b001u);
+  CHECK(sides.start[0] == Approx(0.9f));
+  CHECK(sides.end[0] == Approx(0.8f));
   CHECK(bspf::detail::exactMask(block, swept, start, end) == 0b001u);
   // Moving away, out of reach: the planes method needs the end within reach.
-  CHECK(bspf::detail::planesMask(block, swept, Vec3(0, 0.9f, 0), Vec3(0, 1.0f, 0)) == 0u);
+  CHECK(bspf::detail::planesMask(block, swept, Vec3(0, 0.9f, 0), Vec3(0, 1.0f, 0), sides) == 0u);
   // The exact sweep keeps a path that starts within reach.
   CHECK(bspf::detail::exactMask(block, swept, Vec3(0, 0.8f, 0), Vec3(0, 1.0f, 0)) == 0b001u);
   // Unused lanes never pass, even for a box around everything.
