@@ -11,6 +11,7 @@
 #include "brushes.h"
 #include "support/test_support.h"
 #include "walkers_sim.h"
+#include "walkers_svg.h"
 
 using bspf::Vec3;
 using bspf::walkers::Brush;
@@ -540,4 +541,78 @@ TEST_CASE("walkers exits with status 2 for bad options and 1 for a level it cann
   INFO(missing.err);
   REQUIRE(missing.status == 1);
   REQUIRE_THAT(missing.err, Catch::Contains("absent.bspf"));
+}
+
+namespace {
+
+// How often `needle` occurs in `text`.
+std::size_t occurrences(const std::string& text, const std::string& needle) {
+  std::size_t count = 0;
+  for (std::size_t at = text.find(needle); at != std::string::npos;
+       at = text.find(needle, at + needle.size()))
+    ++count;
+  return count;
+}
+
+std::string readFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace
+
+TEST_CASE("walkers --svg draws the level, one path per agent, and the run's events with its counts",
+          "[samples][walkers][svg]") {
+  const std::filesystem::path dir = bspf::test::freshTempDir("walkers-svg");
+  const std::filesystem::path samples = bspf::test::samplesDir();
+  bspc::compileFile(samples / "box_room.obj", dir / "box_room.bspf", {});
+  // Spawn 0 in the room; spawn 1 far outside it: that agent falls out.
+  std::ofstream(dir / "spawns.txt") << "0 0.75 0\n100 0.75 100\n";
+  // A brush filling the room's inside less 0.1 m: every agent in the room is
+  // inside it every frame.
+  std::ofstream(dir / "room.brushes.txt")
+      << "1 0 0 2.9 -1 0 0 2.9 0 1 0 2.9 0 -1 0 -0.1 0 0 1 2.9 0 0 -1 2.9\n";
+  const auto r =
+      runWalkers(quoted(dir / "box_room.bspf") + " --spawns " + quoted(dir / "spawns.txt") +
+                 " --agents 4 --frames 90 --brushes " + quoted(dir / "room.brushes.txt") +
+                 " --svg " + quoted(dir / "run.svg") + " --json");
+  INFO(r.err << r.out);
+  REQUIRE(r.status == 0);
+  REQUIRE(jsonValue(r.out, "fell_out") == "2");
+  REQUIRE(jsonValue(r.out, "inside_solid") == "180");
+  const std::string svg = readFile(dir / "run.svg");
+  REQUIRE_THAT(svg, Catch::StartsWith("<svg xmlns=\"http://www.w3.org/2000/svg\"") &&
+                        Catch::EndsWith("</svg>\n"));
+  REQUIRE_FALSE(std::filesystem::exists(dir / "run.svg.tmp"));
+  // The counts in the picture are walkers' own.
+  REQUIRE_THAT(svg, Catch::Contains("refused moves " + jsonValue(r.out, "refused_moves") +
+                                    ", fell out 2, inside-solid agent-frames 180"));
+  REQUIRE(occurrences(svg, "<polyline") == 4);
+  // A magenta ring where each of the two crossed the level's lowest point,
+  // an orange dot per spot inside the brush; the room's walls as lines.
+  REQUIRE(occurrences(svg, "fill=\"none\" stroke=\"#d000d0\"") == 2);
+  REQUIRE(occurrences(svg, "fill=\"#ff8c00\"/>") > 0);
+  REQUIRE(occurrences(svg, "<path fill=\"none\" stroke=\"#5a3214\"") > 0);
+}
+
+TEST_CASE("the walkers picture marks a refused move where the agent stood, once per 5 cm square",
+          "[samples][walkers][svg]") {
+  const bspf::World world = bspf::test::compileSample("box_room");
+  bspf::walkers::SvgRecorder recorder(world);
+  std::vector<bspf::Body> bodies(2);
+  bodies[0].position = Vec3(1.01f, 0.85f, 2.01f);
+  bodies[1].position = Vec3(-1, 0.85f, -1);
+  std::vector<bspf::StepReport> reports(2);
+  reports[0].refused = true;
+  recorder.frame(bodies, reports, {});
+  bodies[0].position = Vec3(1.02f, 0.85f, 2.02f);  // the same 5 cm square
+  recorder.frame(bodies, reports, {});
+  REQUIRE(recorder.refusedMoves() == 2);
+  const std::string svg = recorder.svg("test");
+  // The two share a 5 cm square: one cross drawn (one path), two counted.
+  REQUIRE(occurrences(svg, "stroke=\"#e00000\"") == 1);
+  REQUIRE_THAT(svg, Catch::Contains("refused moves 2,"));
+  REQUIRE(occurrences(svg, "<polyline") == 2);
 }
