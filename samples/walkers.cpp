@@ -26,7 +26,6 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <map>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -98,10 +97,11 @@ int main(int argc, char** argv) {
   bspf::walkers::Options options;
   std::string levelPath, spawnsPath, tracePath, brushesPath, svgPath;
   bool json = false;
-  app.add_option("level", levelPath, "The compiled level (.bspf)")->required();
+  app.add_option("level", levelPath, "The compiled level (.bspf)")->type_name("FILE")->required();
   app.add_option("--spawns", spawnsPath,
                  "Spawn points, one 'x y z' a line; agents start 0.3 m above them, round robin "
-                 "(default: random open walkable floor)");
+                 "(default: random open walkable floor)")
+      ->type_name("FILE");
   app.add_option("--agents", options.agents, "Number of agents")->capture_default_str();
   app.add_option("--frames", options.frames, "Frames to simulate")->capture_default_str();
   app.add_option("--speed", options.speed, "Walking speed, m/s")->capture_default_str();
@@ -111,12 +111,9 @@ int main(int argc, char** argv) {
   app.add_option("--radius-xz", options.radii.xz, "Body radius along x and z, m")
       ->capture_default_str();
   app.add_option("--radius-y", options.radii.y, "Body radius along y, m")->capture_default_str();
-  app.add_option("--method", options.method, "Narrow phase: planes (the article's) or exact")
-      ->transform(CLI::CheckedTransformer(
-          std::map<std::string, bspf::CollisionMethod>{
-              {"planes", bspf::CollisionMethod::Planes},
-              {"exact", bspf::CollisionMethod::ExactSweep}},
-          CLI::ignore_case))
+  std::string method = "planes";
+  app.add_option("--method", method, "Narrow phase: planes (the article's) or exact")
+      ->type_name("planes|exact")
       ->capture_default_str();
   app.add_option("--step-height", options.stepHeight,
                  "Highest ledge a walking agent steps up onto, m (0: off, as in the article)")
@@ -125,10 +122,12 @@ int main(int argc, char** argv) {
                  "Threads stepping the crowd (a thread pool; same trajectories for any number)")
       ->capture_default_str();
   app.add_option("--trace", tracePath,
-                 "Write 'frame,agent,x,y,z' (every centre after every frame) to this CSV");
+                 "Write 'frame,agent,x,y,z' (every centre after every frame) to this CSV")
+      ->type_name("FILE");
   app.add_option("--svg", svgPath,
                  "Draw the level from above, with every agent's path, refused moves, fell-out "
-                 "and inside-solid points, to this SVG file");
+                 "and inside-solid points, to this SVG file")
+      ->type_name("FILE");
   app.add_flag("--json", json, "Print one JSON object instead of a summary");
   bool accuracy = false;
   app.add_flag("--accuracy", accuracy,
@@ -137,13 +136,21 @@ int main(int argc, char** argv) {
                "from the same state");
   app.add_option("--brushes", brushesPath,
                  "The level's solids as planes (a .brushes.txt file); counts agents whose centre "
-                 "is inside one, after every frame");
+                 "is inside one, after every frame")
+      ->type_name("FILE");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);
     return fail(std::string(e.what()) + " (see walkers --help)", 2);
   }
+  if (CLI::detail::to_lower(method) == "planes")
+    options.method = bspf::CollisionMethod::Planes;
+  else if (CLI::detail::to_lower(method) == "exact")
+    options.method = bspf::CollisionMethod::ExactSweep;
+  else
+    return fail(
+        "--method '" + method + "': the narrow phase is planes or exact (see walkers --help)", 2);
   if (const std::string problem = bspf::walkers::validate(options); !problem.empty())
     return fail(problem, 2);
 

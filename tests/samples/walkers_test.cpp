@@ -547,6 +547,8 @@ TEST_CASE("walkers exits with status 2 for bad options and 1 for a level it cann
     INFO(r.err);
     REQUIRE(r.status == 2);
     REQUIRE_THAT(r.err, Catch::StartsWith("walkers: error: ") && Catch::EndsWith("\n"));
+    // The line names the option it is about.
+    REQUIRE_THAT(r.err, Catch::Contains(options.substr(0, options.find(' '))));
     REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   }
   const auto missing = runWalkers(quoted(dir / "absent.bspf"));
