@@ -51,6 +51,7 @@ class SvgRecorder {
   void frame(std::span<const Body> bodies, std::span<const StepReport> reports,
              const std::vector<bool>& insideSolid) {
     const float floorY = world_->blob().bounds_min()->y();
+    insideChecked_ = insideChecked_ || !insideSolid.empty();
     if (paths_.empty()) {
       paths_.resize(bodies.size());
       fell_.assign(bodies.size(), false);
@@ -94,10 +95,12 @@ class SvgRecorder {
             "viewBox=\"%.2f %.2f %.2f %.2f\">\n",
             (width + 2 * margin) * pixels, (depth + 2 * margin + legend) * pixels, minX - margin,
             minZ - margin, width + 2 * margin, depth + 2 * margin + legend);
+    // Without brushes nothing was checked: the picture says so, not 0.
+    const std::string inside = insideChecked_ ? std::to_string(insideCount_) : "not checked";
     appendf(out,
             "<desc>walkers top-down view: %zu agents, refused moves %lld, fell out %lld, "
-            "inside-solid agent-frames %lld</desc>\n",
-            paths_.size(), refusedCount_, fellOutCount_, insideCount_);
+            "inside-solid agent-frames %s</desc>\n",
+            paths_.size(), refusedCount_, fellOutCount_, inside.c_str());
     appendf(out, "<rect x=\"%.2f\" y=\"%.2f\" width=\"%.2f\" height=\"%.2f\" fill=\"#ffffff\"/>\n",
             minX - margin, minZ - margin, width + 2 * margin, depth + 2 * margin + legend);
 
@@ -231,8 +234,9 @@ class SvgRecorder {
     appendf(out,
             "<text x=\"%.2f\" y=\"%.2f\"><tspan fill=\"#e00000\">x refused moves %lld</tspan>; "
             "<tspan fill=\"#d000d0\">o fell out %lld</tspan>; "
-            "<tspan fill=\"#ff8c00\">&#8226; inside a solid %lld</tspan></text>\n</g>\n",
-            x0, y0 + 3 * line + 0.2f * font, refusedCount_, fellOutCount_, insideCount_);
+            "<tspan fill=\"#ff8c00\">&#8226; inside a solid %s</tspan></text>\n</g>\n",
+            x0, y0 + 3 * line + 0.2f * font, refusedCount_, fellOutCount_,
+            (insideChecked_ ? inside : std::string("not checked (no --brushes)")).c_str());
     out += "</svg>\n";
     return out;
   }
@@ -315,6 +319,7 @@ class SvgRecorder {
   std::vector<bool> fell_;
   std::vector<std::pair<float, float>> refused_, fellOut_, inside_;
   long long refusedCount_ = 0, fellOutCount_ = 0, insideCount_ = 0;
+  bool insideChecked_ = false;  // some frame came with brush results
   std::set<std::tuple<const void*, std::int64_t, std::int64_t>> seen_;
 };
 

@@ -628,5 +628,7 @@ TEST_CASE("the walkers picture marks a refused move where the agent stood, once 
   // The two share a 5 cm square: one cross drawn (one path), two counted.
   REQUIRE(occurrences(svg, "stroke=\"#e00000\"") == 1);
   REQUIRE_THAT(svg, Catch::Contains("refused moves 2,"));
+  // No brush results were given: the picture says so rather than 0.
+  REQUIRE_THAT(svg, Catch::Contains("inside-solid agent-frames not checked"));
   REQUIRE(occurrences(svg, "<polyline") == 2);
 }
