@@ -277,7 +277,7 @@ void stepBody(benchmark::State& state, const Level& level, CollisionMethod metho
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
   const std::filesystem::path source = BSPF_SOURCE_DIR;
   std::vector<std::filesystem::path> bases{source / "samples/arena"};
   if (std::filesystem::exists(source / "../shared/levels/oa_dm5.obj"))

@@ -40,6 +40,7 @@
 #include <string>
 #include <vector>
 
+#include "support/cli.h"
 #include "velocity.h"  // the runtime's private velocity model: the desired end
 #include "walkers_sim.h"
 
@@ -261,7 +262,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--json", json, "Print one JSON object instead of a Markdown table");
   app.add_flag("--no-header", noHeader, "Markdown rows only (to append to a table)");
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = bspf::bench::parseCommandLine(app, argc, argv); status >= 0) return status;
   if (const std::string problem = bspf::walkers::validate(options); !problem.empty()) {
     std::fprintf(stderr, "bspf_replay_bench: error: %s\n", problem.c_str());
     return 2;

@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "oracle.h"
+#include "support/cli.h"
 #include "support/mesh_blob.h"
 #include "walkers_sim.h"
 
@@ -315,7 +316,7 @@ int main(int argc, char** argv) {
   app.add_flag("--default-only", defaultOnly, "Only the default settings, no knob varied");
   app.add_option("--method", methods, "Only these methods (repeatable)")
       ->check(CLI::IsMember({"planes", "exact", "bullet"}));
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = bspf::bench::parseCommandLine(app, argc, argv); status >= 0) return status;
   if (quick) {
     agents = 16;
     frames = 60;

@@ -7,8 +7,10 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cstdio>
 #include <iostream>
 #include <map>
+#include <tuple>
 
 namespace {
 
@@ -22,6 +24,49 @@ int runInfo(const std::string& path) {
   return 0;
 }
 
+// bspc::validate's message ("invalid setting: scale must be finite and > 0")
+// with the option it is about and its value ("--scale '-1': must be finite
+// and > 0").
+std::string namingOption(const std::string& message, const bspc::CompileSettings& s) {
+  const auto number = [](double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", v);
+    return std::string(text);
+  };
+  const std::tuple<const char*, const char*, double> kOptions[] = {
+      {"scale", "--scale", s.import.scale},
+      {"weld tolerance", "--weld", s.clean.weldTolerance},
+      {"minimum triangle area", "--min-area", s.clean.minTriangleArea},
+      {"max leaf triangles", "--max-leaf-triangles", s.tree.maxLeafTriangles},
+      {"max depth", "--max-depth", s.tree.maxDepth},
+      {"balance weight", "--balance-weight", s.tree.balanceWeight},
+      {"split weight", "--split-weight", s.tree.splitWeight},
+      {"query reach", "--query-reach", s.tree.queryReach},
+      {"axis candidates", "--axis-candidates", s.tree.axisCandidatesPerAxis},
+      {"triangle candidates", "--triangle-candidates", s.tree.triangleCandidates}};
+  const std::string prefix = "invalid setting: ";
+  if (message.rfind(prefix, 0) != 0) return message;
+  const std::string rest = message.substr(prefix.size());
+  for (const auto& [setting, option, value] : kOptions)
+    if (rest.rfind(std::string(setting) + " ", 0) == 0)
+      return std::string(option) + " '" + number(value) +
+             "': " + rest.substr(std::string(setting).size() + 1);
+  return message;
+}
+
+// CLI11's messages, said for people: "Could not convert: --scale = abc"
+// becomes "--scale 'abc': not a valid number".
+std::string readable(const std::string& message) {
+  const std::string convert = "Could not convert: ";
+  if (message.rfind(convert, 0) == 0) {
+    const std::string rest = message.substr(convert.size());
+    const std::size_t equals = rest.find(" = ");
+    if (equals != std::string::npos)
+      return rest.substr(0, equals) + " '" + rest.substr(equals + 3) + "': not a valid number";
+  }
+  return message;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -33,60 +78,100 @@ int main(int argc, char** argv) {
 
   app.set_version_flag("--version", "bspc " BSPF_VERSION " (format version " +
                                         std::to_string(bspf::kFormatVersion) + ")");
-  app.add_option("input", input, "Source mesh: OBJ, glTF, FBX, PLY, ... (anything assimp reads)");
-  app.add_option("-o,--output", output, "The .bspf file to write (replaced atomically)");
-  app.add_option("--info", infoPath, "Verify a .bspf file and print its metadata and tree figures");
-  app.add_option("--up", settings.import.up, "Up axis of the source: x, y or z")
-      ->transform(CLI::CheckedTransformer(
-          std::map<std::string, bspc::UpAxis>{
-              {"x", bspc::UpAxis::X}, {"y", bspc::UpAxis::Y}, {"z", bspc::UpAxis::Z}},
-          CLI::ignore_case))
+  app.add_option("input", input, "Source mesh: OBJ, glTF, FBX, PLY, ... (anything assimp reads)")
+      ->type_name("FILE");
+  app.add_option("-o,--output", output, "The .bspf file to write (replaced atomically)")
+      ->type_name("FILE");
+  app.add_option("--info", infoPath, "Verify a .bspf file and print its metadata and tree figures")
+      ->type_name("FILE");
+  std::string up = "y", candidates = "both";
+  app.add_option("--up", up,
+                 "Up axis of the source: x, y or z (the blob is always Y up). Not applied to a "
+                 "Collada file that declares its own up axis: the importer turns it Y up")
+      ->type_name("AXIS")
       ->capture_default_str();
-  app.add_option("--scale", settings.import.scale, "Metres per source unit")->capture_default_str();
+  app.add_option("--scale", settings.import.scale, "Metres per source unit")
+      ->type_name("M")
+      ->capture_default_str();
   app.add_option("--weld", settings.clean.weldTolerance, "Weld tolerance, metres")
+      ->type_name("M")
       ->capture_default_str();
   app.add_option("--min-area", settings.clean.minTriangleArea,
                  "Drop triangles below this area, square metres")
+      ->type_name("M2")
       ->capture_default_str();
   app.add_option("--max-leaf-triangles", settings.tree.maxLeafTriangles,
                  "A node this small becomes a leaf")
+      ->type_name("N")
       ->capture_default_str();
   app.add_option("--max-depth", settings.tree.maxDepth, "Deepest leaf (1 to 64)")
+      ->type_name("N")
       ->capture_default_str();
   app.add_option("--balance-weight", settings.tree.balanceWeight,
                  "Split score weight of front/back imbalance")
+      ->type_name("W")
       ->capture_default_str();
   app.add_option("--split-weight", settings.tree.splitWeight,
                  "Split score weight of triangles straddling the plane")
+      ->type_name("W")
       ->capture_default_str();
   app.add_option("--query-reach", settings.tree.queryReach,
                  "Typical query size, metres: a split must pay for itself at this size")
+      ->type_name("M")
       ->capture_default_str();
-  app.add_option("--candidates", settings.tree.candidates,
-                 "Split planes tried: axis, triangle, both")
-      ->transform(CLI::CheckedTransformer(
-          std::map<std::string, bspc::SplitCandidates>{
-              {"axis", bspc::SplitCandidates::Axis},
-              {"triangle", bspc::SplitCandidates::Triangle},
-              {"both", bspc::SplitCandidates::Both}},
-          CLI::ignore_case))
+  app.add_option("--candidates", candidates, "Split planes tried: axis, triangle or both")
+      ->type_name("WHERE")
       ->capture_default_str();
   app.add_option("--axis-candidates", settings.tree.axisCandidatesPerAxis,
                  "Axis-aligned candidates per axis")
+      ->type_name("N")
       ->capture_default_str();
   app.add_option("--triangle-candidates", settings.tree.triangleCandidates,
                  "Triangle-plane candidates per node")
+      ->type_name("N")
       ->capture_default_str();
-  app.add_option("--stats-json", statsJson, "Also write the compile report as JSON to this file");
-  app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
+  app.add_option("--stats-json", statsJson, "Also write the compile report as JSON to this file")
+      ->type_name("FILE");
+  app.add_flag("-q,--quiet", quiet, "Print nothing but errors and warnings");
+  app.footer(R"(Examples:
+  bspc level.obj -o level.bspf                   an OBJ in metres, Y up
+  bspc q3dm1.obj -o q3dm1.bspf --up z --scale 0.03125
+                                                 Quake units (1/32 m), Z up
+  bspc scene.gltf -o scene.bspf --stats-json scene.json
+                                                 also the compile report as JSON
+  bspc --info level.bspf                         verify a blob, print its figures
+
+Exit status: 0 written; 1 the input could not be compiled or a file could
+not be written (the error names the file, and no output is left); 2 a bad
+command line (the error names the option).)");
 
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);
-    std::cerr << "bspc: error: " << e.what() << " (see bspc --help)\n";
+    std::cerr << "bspc: error: " << readable(e.what()) << " (see bspc --help)\n";
     return 2;
   }
+  // The option named, its value quoted, what it takes.
+  const auto badValue = [](const std::string& option, const std::string& value,
+                           const std::string& takes) {
+    std::cerr << "bspc: error: " << option << " '" << value << "': " << takes
+              << " (see bspc --help)\n";
+    return 2;
+  };
+  const std::map<std::string, bspc::UpAxis> axes{
+      {"x", bspc::UpAxis::X}, {"y", bspc::UpAxis::Y}, {"z", bspc::UpAxis::Z}};
+  const std::map<std::string, bspc::SplitCandidates> candidateKinds{
+      {"axis", bspc::SplitCandidates::Axis},
+      {"triangle", bspc::SplitCandidates::Triangle},
+      {"both", bspc::SplitCandidates::Both}};
+  const std::string upLower = CLI::detail::to_lower(up),
+                    candidatesLower = CLI::detail::to_lower(candidates);
+  if (!axes.count(upLower)) return badValue("--up", up, "the up axis is x, y or z");
+  if (!candidateKinds.count(candidatesLower))
+    return badValue("--candidates", candidates, "takes axis, triangle or both");
+  settings.import.up = axes.at(upLower);
+  settings.tree.candidates = candidateKinds.at(candidatesLower);
   if (!infoPath.empty()) return runInfo(infoPath);
   if (input.empty() || output.empty()) {
     std::cerr << "bspc: error: need an input mesh and -o OUTPUT.bspf (see bspc --help)\n";
@@ -97,7 +182,7 @@ int main(int argc, char** argv) {
   try {
     bspc::validate(settings);
   } catch (const bspc::CompileError& e) {
-    std::cerr << "bspc: error: " << e.what() << " (see bspc --help)\n";
+    std::cerr << "bspc: error: " << namingOption(e.what(), settings) << " (see bspc --help)\n";
     return 2;
   }
   if (!quiet && ::isatty(STDERR_FILENO))
@@ -110,6 +195,8 @@ int main(int argc, char** argv) {
   try {
     const bspc::CompileReport report = bspc::compileFile(input, output, settings, statsJson);
     if (settings.progress) std::cerr << "\r\033[K";
+    for (const std::string& warning : report.warnings)
+      std::cerr << "bspc: warning: " << input << ": " << warning << "\n";
     if (!quiet)
       std::cout << "bspc: wrote " << output << ": " << report.triangles << " triangles, "
                 << report.outputBytes << " bytes, " << report.tree.leaves << " leaves, depth "

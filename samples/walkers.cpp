@@ -4,7 +4,7 @@
 //   walkers LEVEL.bspf [--spawns FILE] [--agents N] [--frames F] [--speed M_PER_S]
 //           [--seed K] [--dt S] [--radius-xz R] [--radius-y R] [--method planes|exact]
 //           [--step-height M] [--threads N]
-//           [--trace OUT.csv] [--json]
+//           [--trace OUT.csv] [--svg OUT.svg] [--json]
 //           [--brushes FILE]
 //
 // Each agent walks in a random direction (a new one every 0.5 to 2 s) at
@@ -15,7 +15,9 @@
 // agent's centre after every frame. With --brushes (the level's solids as
 // planes, a `.brushes.txt` file) it counts, after every frame and outside the
 // timed region, the agents whose centre is inside a solid (by more than 1 mm):
-// 0 when the movement step never lets a body into a wall. Same inputs and
+// 0 when the movement step never lets a body into a wall. --svg draws the
+// level from above with every agent's path and the refused moves, fell-out
+// points and inside-solid points (walkers_svg.h). Same inputs and
 // seed, same trace.
 //
 // Links the runtime only (never the compiler or assimp).
@@ -24,7 +26,6 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <map>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -33,6 +34,7 @@
 
 #include "oracle.h"
 #include "walkers_sim.h"
+#include "walkers_svg.h"
 
 namespace {
 
@@ -66,17 +68,40 @@ std::string exact(float v) {
   return text;
 }
 
+// Writes `text` to path.tmp, then renames it over `path`: a failed run
+// leaves no half-written file. Returns an error message naming the file, or
+// an empty string.
+std::string writeAtomically(const std::string& path, const std::string& text) {
+  const std::filesystem::path temp = path + ".tmp";
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    if (!out) return temp.string() + ": cannot write";
+    out << text;
+    out.close();
+    if (!out) {
+      std::error_code ignored;
+      std::filesystem::remove(temp, ignored);
+      return temp.string() + ": write error";
+    }
+  }
+  std::error_code error;
+  std::filesystem::rename(temp, path, error);
+  if (error) return path + ": cannot replace it: " + error.message();
+  return {};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"walkers: random-walking ellipsoid bodies in a compiled .bspf level", "walkers"};
   bspf::walkers::Options options;
-  std::string levelPath, spawnsPath, tracePath, brushesPath;
+  std::string levelPath, spawnsPath, tracePath, brushesPath, svgPath;
   bool json = false;
-  app.add_option("level", levelPath, "The compiled level (.bspf)")->required();
+  app.add_option("level", levelPath, "The compiled level (.bspf)")->type_name("FILE")->required();
   app.add_option("--spawns", spawnsPath,
                  "Spawn points, one 'x y z' a line; agents start 0.3 m above them, round robin "
-                 "(default: random open walkable floor)");
+                 "(default: random open walkable floor)")
+      ->type_name("FILE");
   app.add_option("--agents", options.agents, "Number of agents")->capture_default_str();
   app.add_option("--frames", options.frames, "Frames to simulate")->capture_default_str();
   app.add_option("--speed", options.speed, "Walking speed, m/s")->capture_default_str();
@@ -86,12 +111,9 @@ int main(int argc, char** argv) {
   app.add_option("--radius-xz", options.radii.xz, "Body radius along x and z, m")
       ->capture_default_str();
   app.add_option("--radius-y", options.radii.y, "Body radius along y, m")->capture_default_str();
-  app.add_option("--method", options.method, "Narrow phase: planes (the article's) or exact")
-      ->transform(CLI::CheckedTransformer(
-          std::map<std::string, bspf::CollisionMethod>{
-              {"planes", bspf::CollisionMethod::Planes},
-              {"exact", bspf::CollisionMethod::ExactSweep}},
-          CLI::ignore_case))
+  std::string method = "planes";
+  app.add_option("--method", method, "Narrow phase: planes (the article's) or exact")
+      ->type_name("planes|exact")
       ->capture_default_str();
   app.add_option("--step-height", options.stepHeight,
                  "Highest ledge a walking agent steps up onto, m (0: off, as in the article)")
@@ -100,7 +122,12 @@ int main(int argc, char** argv) {
                  "Threads stepping the crowd (a thread pool; same trajectories for any number)")
       ->capture_default_str();
   app.add_option("--trace", tracePath,
-                 "Write 'frame,agent,x,y,z' (every centre after every frame) to this CSV");
+                 "Write 'frame,agent,x,y,z' (every centre after every frame) to this CSV")
+      ->type_name("FILE");
+  app.add_option("--svg", svgPath,
+                 "Draw the level from above, with every agent's path, refused moves, fell-out "
+                 "and inside-solid points, to this SVG file")
+      ->type_name("FILE");
   app.add_flag("--json", json, "Print one JSON object instead of a summary");
   bool accuracy = false;
   app.add_flag("--accuracy", accuracy,
@@ -109,13 +136,21 @@ int main(int argc, char** argv) {
                "from the same state");
   app.add_option("--brushes", brushesPath,
                  "The level's solids as planes (a .brushes.txt file); counts agents whose centre "
-                 "is inside one, after every frame");
+                 "is inside one, after every frame")
+      ->type_name("FILE");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);
     return fail(std::string(e.what()) + " (see walkers --help)", 2);
   }
+  if (CLI::detail::to_lower(method) == "planes")
+    options.method = bspf::CollisionMethod::Planes;
+  else if (CLI::detail::to_lower(method) == "exact")
+    options.method = bspf::CollisionMethod::ExactSweep;
+  else
+    return fail(
+        "--method '" + method + "': the narrow phase is planes or exact (see walkers --help)", 2);
   if (const std::string problem = bspf::walkers::validate(options); !problem.empty())
     return fail(problem, 2);
 
@@ -147,6 +182,9 @@ int main(int argc, char** argv) {
   }
 
   bspf::walkers::Simulation sim(world, starts.points, options);
+  std::optional<bspf::walkers::SvgRecorder> svg;
+  if (!svgPath.empty()) svg.emplace(world);
+  std::vector<bool> insideNow;
   long long insideSolid = 0;  // agent-frames with the centre inside a solid
   std::vector<double> penetrations, deviations;
   bspf::StepScratch oracleScratch;
@@ -164,6 +202,13 @@ int main(int argc, char** argv) {
     else
       sim.step();
     if (brushes) insideSolid += bspf::walkers::countInsideSolid(*brushes, sim.bodies());
+    if (svg) {
+      insideNow.clear();
+      if (brushes)
+        for (const bspf::Body& b : sim.bodies())
+          insideNow.push_back(brushes->insideAnySolid(b.position, bspf::walkers::kInsideMargin));
+      svg->frame(sim.bodies(), sim.reports(), insideNow);
+    }
     if (accuracy)
       for (const bspf::Body& b : sim.bodies())
         penetrations.push_back(bspf::oracle::penetration(*judged, b.position, b.radii));
@@ -186,6 +231,16 @@ int main(int argc, char** argv) {
     std::error_code error;
     std::filesystem::rename(traceTemp, tracePath, error);
     if (error) return fail(tracePath + ": cannot replace it: " + error.message());
+  }
+
+  if (svg) {
+    const std::string title =
+        std::filesystem::path(levelPath).filename().string() + ": " +
+        std::to_string(options.agents) + " agents, " + std::to_string(options.frames) +
+        " frames, " + exact(options.speed) + " m/s, " +
+        (options.method == bspf::CollisionMethod::Planes ? "planes" : "exact");
+    if (const std::string problem = writeAtomically(svgPath, svg->svg(title)); !problem.empty())
+      return fail(problem);
   }
 
   const bspf::walkers::Summary s = sim.summary();
@@ -249,6 +304,7 @@ int main(int argc, char** argv) {
           penetrationP99.c_str(), penetrationMax.c_str(), deviationP50.c_str(),
           deviationP99.c_str(), deviationMax.c_str());
     if (!tracePath.empty()) std::printf("  trace: %s\n", tracePath.c_str());
+    if (!svgPath.empty()) std::printf("  picture: %s\n", svgPath.c_str());
   }
   return 0;
 }

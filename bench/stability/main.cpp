@@ -6,8 +6,14 @@
 #include <exception>
 
 #include "stability/scenes.h"
+#include "support/cli.h"
 
-int main() {
+int main(int argc, char** argv) {
+  CLI::App app{
+      "bspf_stability: runs every failure case of docs/stability.md with both collision "
+      "methods and prints its table (Markdown), then how many cases fail.",
+      "bspf_stability"};
+  if (const int status = bspf::bench::parseCommandLine(app, argc, argv); status >= 0) return status;
   using namespace bspf::stability;
   const Tolerances tolerances;
   std::printf(

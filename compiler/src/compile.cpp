@@ -101,6 +101,7 @@ CompileReport compileFile(const std::filesystem::path& input, const std::filesys
         timed(report.seconds.import, [&] { return importMesh(input, settings.import); });
     const std::vector<std::uint8_t> blob =
         compileCleanStages(mesh, settings, input.filename().string(), report);
+    report.warnings = mesh.warnings;
     timed(report.seconds.write, [&] { blobFile.write(blob); });
   } catch (const CompileError& e) {
     const std::string what = e.what();

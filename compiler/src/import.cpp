@@ -1,5 +1,6 @@
 #include <assimp/DefaultIOStream.h>
 #include <assimp/DefaultIOSystem.h>
+#include <assimp/commonMetaData.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <bspc/import.h>
@@ -12,6 +13,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <memory>
 #include <string_view>
 #include <utility>
 #include <vector>
@@ -39,6 +41,14 @@ Eigen::Matrix4d sourceToLevel(const ImportSettings& settings) {
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
   m.topLeftCorner<3, 3>() = settings.scale * rotation;
   return m;
+}
+
+// Whether assimp read `scene` with its Collada importer (which converts the
+// file's declared up axis to Y itself).
+bool readAsCollada(const aiScene& scene) {
+  aiString format;
+  return scene.mMetaData && scene.mMetaData->Get(AI_METADATA_SOURCE_FORMAT, format) &&
+         std::string_view(format.C_Str()).find("Collada") != std::string_view::npos;
 }
 
 // Appends every mesh of the scene's node tree, each vertex moved by its
@@ -112,6 +122,28 @@ class RegularFilesOnly : public Assimp::DefaultIOSystem {
   };
 };
 
+// The up axis a Collada file declares in its <asset> (<up_axis>X_UP</up_axis>,
+// say), or Y when it declares none or an unknown one. The asset element
+// comes first in the file: the first 64 kB are read (opened as assimp's
+// reads are: a regular file only, never waited on).
+UpAxis colladaDeclaredUp(const std::filesystem::path& path) {
+  RegularFilesOnly files;
+  const std::unique_ptr<Assimp::IOStream> in(files.Open(path.c_str(), "rb"));
+  if (!in) return UpAxis::Y;
+  std::string head(64 * 1024, '\0');
+  head.resize(in->Read(head.data(), 1, head.size()));
+  const std::size_t open = head.find("<up_axis>");
+  if (open == std::string::npos) return UpAxis::Y;
+  const std::size_t from = open + 9, close = head.find("</up_axis>", from);
+  if (close == std::string::npos) return UpAxis::Y;
+  std::string value;
+  for (const char c : head.substr(from, close - from))
+    if (c != ' ' && c != '\t' && c != '\n' && c != '\r') value += c;
+  if (value == "X_UP") return UpAxis::X;
+  if (value == "Z_UP") return UpAxis::Z;
+  return UpAxis::Y;
+}
+
 }  // namespace
 
 Mesh importMesh(const std::filesystem::path& path, const ImportSettings& settings) {
@@ -142,7 +174,18 @@ Mesh importMesh(const std::filesystem::path& path, const ImportSettings& setting
     throw CompileError("cannot import: " + why);
   }
   Mesh mesh;
-  appendScene(*scene, sourceToLevel(settings), mesh);
+  ImportSettings applied = settings;
+  if (settings.up != UpAxis::Y && readAsCollada(*scene)) {
+    const UpAxis declared = colladaDeclaredUp(path);
+    if (declared != UpAxis::Y) {
+      // assimp already turned this scene to Y up: --up again would turn it over.
+      applied.up = UpAxis::Y;
+      mesh.warnings.push_back(std::string("the Collada file declares ") + toString(declared) +
+                              " up, which the importer already turned to Y up: --up " +
+                              toString(settings.up) + " not applied");
+    }
+  }
+  appendScene(*scene, sourceToLevel(applied), mesh);
   if (mesh.triangles.empty()) throw CompileError("the scene holds no triangles");
   return mesh;
 }

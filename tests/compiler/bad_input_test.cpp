@@ -242,17 +242,18 @@ TEST_CASE("bspc fails cleanly on bad options", "[compiler][bad-input]") {
     Expected expected;
   };
   const std::vector<Case> cases{
-      {"--max-depth 0", {{}, {"max depth", "max-depth"}, 2}},
-      {"--max-depth 65", {{}, {"max depth", "max-depth"}, 2}},
-      {"--scale -1", {{}, {"scale"}, 2}},
-      {"--scale=-1", {{}, {"scale"}, 2}},
-      {"--scale 0", {{}, {"scale"}, 2}},
-      {"--scale nan", {{}, {"scale"}, 2}},
-      {"--up w", {{}, {"up"}, 2}},
-      {"--max-leaf-triangles 0", {{}, {"leaf"}, 2}},
-      {"--weld -0.5", {{}, {"weld"}, 2}},
-      {"--candidates sideways", {{}, {"candidates"}, 2}},
-      {"--max-depth many", {{}, {"max-depth", "max depth"}, 2}},
+      // Each names the option and the value given, and says what it takes.
+      {"--max-depth 0", {{"--max-depth '0'"}, {"1 to 64"}, 2}},
+      {"--max-depth 65", {{"--max-depth '65'"}, {"1 to 64"}, 2}},
+      {"--scale -1", {{"--scale '-1'"}, {"> 0"}, 2}},
+      {"--scale=-1", {{"--scale '-1'"}, {"> 0"}, 2}},
+      {"--scale 0", {{"--scale '0'"}, {"> 0"}, 2}},
+      {"--scale nan", {{"--scale 'nan'"}, {"finite"}, 2}},
+      {"--up w", {{"--up 'w'"}, {"x, y or z"}, 2}},
+      {"--max-leaf-triangles 0", {{"--max-leaf-triangles '0'"}, {"1 to 4096"}, 2}},
+      {"--weld -0.5", {{"--weld '-0.5'"}, {">= 0"}, 2}},
+      {"--candidates sideways", {{"--candidates 'sideways'"}, {"axis, triangle or both"}, 2}},
+      {"--max-depth many", {{"--max-depth 'many'"}, {"not a valid number"}, 2}},
       {"--no-such-option", {{}, {"no-such-option"}, 2}},
   };
   for (const Case& c : cases) {

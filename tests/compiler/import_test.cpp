@@ -74,3 +74,76 @@ TEST_CASE("a node transform that does not mirror keeps the file's winding", "[co
   CHECK(faceNormal(mesh, 0).isApprox(Eigen::Vector3d::UnitY()));
   CHECK(faceNormal(mesh, 1).isApprox(-Eigen::Vector3d::UnitY()));
 }
+
+namespace {
+
+// A Collada 1.4 file of one triangle, (0,0,0) (1,0,0) (0,1,0): counter-
+// clockwise seen from +Z, so it faces +Z in the file's coordinates;
+// `upAxis` is the <up_axis> element's text, or "" for none (Y_UP by the
+// Collada specification).
+std::filesystem::path writeCollada(const std::string& tag, const std::string& upAxis) {
+  const std::filesystem::path path = bspf::test::freshTempDir(tag) / "triangle.dae";
+  std::ofstream(path) << R"(<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit name="meter" meter="1"/>)"
+                      << (upAxis.empty() ? "" : "<up_axis>" + upAxis + "</up_axis>") << R"(</asset>
+  <library_geometries><geometry id="g"><mesh>
+    <source id="p"><float_array id="pa" count="9">0 0 0 1 0 0 0 1 0</float_array>
+      <technique_common><accessor source="#pa" count="3" stride="3">
+        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+      </accessor></technique_common></source>
+    <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+    <triangles count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2</p></triangles>
+  </mesh></geometry></library_geometries>
+  <library_visual_scenes><visual_scene id="s"><node id="n"><instance_geometry url="#g"/></node>
+  </visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>
+)";
+  return path;
+}
+
+}  // namespace
+
+TEST_CASE("a Collada file marked Z_UP is turned Y up once: --up z is not applied again, and said",
+          "[compiler][import]") {
+  const std::filesystem::path zUp = writeCollada("import-collada-z", "Z_UP");
+  bspc::ImportSettings settings;
+  SECTION("the default --up y: the importer's conversion alone, no warning") {
+    const bspc::Mesh mesh = bspc::importMesh(zUp, settings);
+    REQUIRE(mesh.triangles.size() == 1);
+    REQUIRE(faceNormal(mesh, 0).isApprox(Eigen::Vector3d::UnitY(), 1e-9));
+    REQUIRE(mesh.warnings.empty());
+  }
+  SECTION("--up z: not applied (it would turn the level upside down), with a warning") {
+    settings.up = bspc::UpAxis::Z;
+    const bspc::Mesh mesh = bspc::importMesh(zUp, settings);
+    REQUIRE(faceNormal(mesh, 0).isApprox(Eigen::Vector3d::UnitY(), 1e-9));
+    REQUIRE(mesh.warnings.size() == 1);
+    REQUIRE_THAT(mesh.warnings[0], Catch::Contains("Collada") && Catch::Contains("--up z"));
+  }
+  SECTION("bspc prints the warning naming the file, and compiles") {
+    const std::filesystem::path out = zUp.parent_path() / "out.bspf";
+    const auto r = bspf::test::run("'" + bspf::test::bspcExecutable().string() + "' '" +
+                                   zUp.string() + "' -o '" + out.string() + "' --up z -q");
+    INFO(r.err);
+    REQUIRE(r.status == 0);
+    REQUIRE_THAT(r.err, Catch::StartsWith("bspc: warning: " + zUp.string() + ": the Collada") &&
+                            Catch::EndsWith("not applied\n"));
+    REQUIRE(std::filesystem::exists(out));
+  }
+}
+
+TEST_CASE(
+    "bspc's --up applies to a Collada file that declares no up axis (the importer left it as is)",
+    "[compiler][import]") {
+  bspc::ImportSettings settings;
+  settings.up = bspc::UpAxis::Z;
+  for (const std::string declared : {"", "Y_UP"}) {
+    INFO("up_axis '" << declared << "'");
+    const bspc::Mesh mesh = bspc::importMesh(writeCollada("import-collada-y", declared), settings);
+    // +Z in the file is up: after --up z it faces +Y.
+    REQUIRE(faceNormal(mesh, 0).isApprox(Eigen::Vector3d::UnitY(), 1e-9));
+    REQUIRE(mesh.warnings.empty());
+  }
+}

@@ -11,6 +11,7 @@
 #include "brushes.h"
 #include "support/test_support.h"
 #include "walkers_sim.h"
+#include "walkers_svg.h"
 
 using bspf::Vec3;
 using bspf::walkers::Brush;
@@ -104,18 +105,12 @@ Outcome walk(const Level& level, std::span<const Vec3> starts,
   return out;
 }
 
-// Every level the walkers test runs on: the sample arena, then the shared
-// levels when ../shared/levels is present.
-std::vector<Level> allLevels(const std::filesystem::path& outDir) {
+// The shared levels (the caller skips the test when ../shared/levels is
+// absent: a user's clone has no ../shared).
+std::vector<Level> sharedLevels(const std::filesystem::path& outDir) {
   std::vector<Level> levels;
-  levels.push_back(loadLevel(bspf::test::samplesDir(), "arena", outDir));
-  const auto shared = bspf::test::sharedLevelsDir();
-  if (!std::filesystem::exists(shared)) {
-    WARN("shared levels skipped: " << shared << " is absent (a user's clone has no ../shared)");
-    return levels;
-  }
   for (const std::string& name : bspf::test::sharedLevelNames())
-    levels.push_back(loadLevel(shared, name, outDir));
+    levels.push_back(loadLevel(bspf::test::sharedLevelsDir(), name, outDir));
   return levels;
 }
 
@@ -320,12 +315,12 @@ TEST_CASE("walkers: spawn files, options, placement and determinism", "[samples]
   }
 }
 
-TEST_CASE("walkers at 6 and 40 m/s never end inside a solid, on the arena and shared levels",
-          "[samples][walkers]") {
-  const std::filesystem::path outDir = bspf::test::freshTempDir("walkers-levels");
-  const std::vector<Level> levels = allLevels(outDir);
-  const bspf::CollisionMethod method =
-      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+namespace {
+
+// Walkers from the spawns and from random floor, at 6 and 40 m/s, with
+// `method`: no agent ever ends a frame inside a solid, and most grounded
+// agents stand on a brush.
+void walkNeverInsideSolid(const std::vector<Level>& levels, bspf::CollisionMethod method) {
   INFO((method == bspf::CollisionMethod::Planes ? "planes" : "exact") << " method");
   for (const Level& level : levels) {
     bspf::walkers::Options options;
@@ -352,6 +347,24 @@ TEST_CASE("walkers at 6 and 40 m/s never end inside a solid, on the arena and sh
       }
     }
   }
+}
+
+}  // namespace
+
+TEST_CASE("walkers at 6 and 40 m/s never end inside a solid, on the arena", "[samples][walkers]") {
+  const std::filesystem::path outDir = bspf::test::freshTempDir("walkers-arena");
+  const std::vector<Level> levels{loadLevel(bspf::test::samplesDir(), "arena", outDir)};
+  walkNeverInsideSolid(levels,
+                       GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep));
+}
+
+TEST_CASE("walkers at 6 and 40 m/s never end inside a solid, on the shared levels",
+          "[samples][walkers][shared-levels]") {
+  BSPF_SKIP_WITHOUT_SHARED_LEVELS();
+  const std::filesystem::path outDir = bspf::test::freshTempDir("walkers-levels");
+  const std::vector<Level> levels = sharedLevels(outDir);
+  walkNeverInsideSolid(levels,
+                       GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep));
 }
 
 namespace {
@@ -534,10 +547,88 @@ TEST_CASE("walkers exits with status 2 for bad options and 1 for a level it cann
     INFO(r.err);
     REQUIRE(r.status == 2);
     REQUIRE_THAT(r.err, Catch::StartsWith("walkers: error: ") && Catch::EndsWith("\n"));
+    // The line names the option it is about.
+    REQUIRE_THAT(r.err, Catch::Contains(options.substr(0, options.find(' '))));
     REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   }
   const auto missing = runWalkers(quoted(dir / "absent.bspf"));
   INFO(missing.err);
   REQUIRE(missing.status == 1);
   REQUIRE_THAT(missing.err, Catch::Contains("absent.bspf"));
+}
+
+namespace {
+
+// How often `needle` occurs in `text`.
+std::size_t occurrences(const std::string& text, const std::string& needle) {
+  std::size_t count = 0;
+  for (std::size_t at = text.find(needle); at != std::string::npos;
+       at = text.find(needle, at + needle.size()))
+    ++count;
+  return count;
+}
+
+std::string readFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace
+
+TEST_CASE("walkers --svg draws the level, one path per agent, and the run's events with its counts",
+          "[samples][walkers][svg]") {
+  const std::filesystem::path dir = bspf::test::freshTempDir("walkers-svg");
+  const std::filesystem::path samples = bspf::test::samplesDir();
+  bspc::compileFile(samples / "box_room.obj", dir / "box_room.bspf", {});
+  // Spawn 0 in the room; spawn 1 far outside it: that agent falls out.
+  std::ofstream(dir / "spawns.txt") << "0 0.75 0\n100 0.75 100\n";
+  // A brush filling the room's inside less 0.1 m: every agent in the room is
+  // inside it every frame.
+  std::ofstream(dir / "room.brushes.txt")
+      << "1 0 0 2.9 -1 0 0 2.9 0 1 0 2.9 0 -1 0 -0.1 0 0 1 2.9 0 0 -1 2.9\n";
+  const auto r =
+      runWalkers(quoted(dir / "box_room.bspf") + " --spawns " + quoted(dir / "spawns.txt") +
+                 " --agents 4 --frames 90 --brushes " + quoted(dir / "room.brushes.txt") +
+                 " --svg " + quoted(dir / "run.svg") + " --json");
+  INFO(r.err << r.out);
+  REQUIRE(r.status == 0);
+  REQUIRE(jsonValue(r.out, "fell_out") == "2");
+  REQUIRE(jsonValue(r.out, "inside_solid") == "180");
+  const std::string svg = readFile(dir / "run.svg");
+  REQUIRE_THAT(svg, Catch::StartsWith("<svg xmlns=\"http://www.w3.org/2000/svg\"") &&
+                        Catch::EndsWith("</svg>\n"));
+  REQUIRE_FALSE(std::filesystem::exists(dir / "run.svg.tmp"));
+  // The counts in the picture are walkers' own.
+  REQUIRE_THAT(svg, Catch::Contains("refused moves " + jsonValue(r.out, "refused_moves") +
+                                    ", fell out 2, inside-solid agent-frames 180"));
+  REQUIRE(occurrences(svg, "<polyline") == 4);
+  // A magenta ring where each of the two crossed the level's lowest point,
+  // an orange dot per spot inside the brush; the room's walls as lines.
+  REQUIRE(occurrences(svg, "fill=\"none\" stroke=\"#d000d0\"") == 2);
+  REQUIRE(occurrences(svg, "fill=\"#ff8c00\"/>") > 0);
+  REQUIRE(occurrences(svg, "<path fill=\"none\" stroke=\"#5a3214\"") > 0);
+}
+
+TEST_CASE("the walkers picture marks a refused move where the agent stood, once per 5 cm square",
+          "[samples][walkers][svg]") {
+  const bspf::World world = bspf::test::compileSample("box_room");
+  bspf::walkers::SvgRecorder recorder(world);
+  std::vector<bspf::Body> bodies(2);
+  bodies[0].position = Vec3(1.01f, 0.85f, 2.01f);
+  bodies[1].position = Vec3(-1, 0.85f, -1);
+  std::vector<bspf::StepReport> reports(2);
+  reports[0].refused = true;
+  recorder.frame(bodies, reports, {});
+  bodies[0].position = Vec3(1.02f, 0.85f, 2.02f);  // the same 5 cm square
+  recorder.frame(bodies, reports, {});
+  REQUIRE(recorder.refusedMoves() == 2);
+  const std::string svg = recorder.svg("test");
+  // The two share a 5 cm square: one cross drawn (one path), two counted.
+  REQUIRE(occurrences(svg, "stroke=\"#e00000\"") == 1);
+  REQUIRE_THAT(svg, Catch::Contains("refused moves 2,"));
+  // No brush results were given: the picture says so rather than 0.
+  REQUIRE_THAT(svg, Catch::Contains("inside-solid agent-frames not checked"));
+  REQUIRE(occurrences(svg, "<polyline") == 2);
 }

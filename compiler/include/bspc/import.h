@@ -13,6 +13,10 @@ namespace bspc {
 /// and lines, rotates `settings.up` to Y and scales to metres. Does not weld
 /// or drop anything else. Throws CompileError when the file cannot be read or
 /// parsed, or holds no triangles.
+/// A Collada file that declares its up axis X_UP or Z_UP (<up_axis> in its
+/// <asset>) is turned to Y up by assimp itself; for such a file
+/// `settings.up` other than Y is not applied (it would turn the level over
+/// again), and the mesh's warnings say so.
 Mesh importMesh(const std::filesystem::path& path, const ImportSettings& settings);
 
 }  // namespace bspc

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace bspc {
@@ -15,6 +16,9 @@ namespace bspc {
 struct Mesh {
   std::vector<Eigen::Vector3d> vertices;
   std::vector<std::array<std::uint32_t, 3>> triangles;
+  /// What the import noticed and worked around, one line each, without the
+  /// file's name (an --up the importer's own axis conversion made moot).
+  std::vector<std::string> warnings;
 };
 
 /// A compile failure caused by the input or the settings. The message is one
