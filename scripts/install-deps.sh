@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Installs the Debian 12 packages bspf builds and tests with. Does nothing when
 # all are present; uses sudo only when not run as root.
 set -euo pipefail
