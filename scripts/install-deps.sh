@@ -6,6 +6,7 @@ set -euo pipefail
 
 packages=(
   cmake g++ make pkg-config
+  ninja-build         # the package tests build consumers with Ninja (tests/package)
   libassimp-dev       # bspc: mesh import (compiler only; the runtime never links it)
   libeigen3-dev       # geometry maths, header-only
   libflatbuffers-dev  # blob format: runtime reader, compiler writer
