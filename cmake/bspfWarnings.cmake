@@ -3,7 +3,11 @@
 # private compile option to every target compiled in DIR and the directories
 # below it. Target-level, unlike add_compile_options, so nothing reaches the
 # targets of a project that includes bspf.
-set(BSPF_WARNING_FLAGS -Wall -Wextra -Wpedantic)
+if(CMAKE_CXX_COMPILER_ID STREQUAL "MSVC")
+  set(BSPF_WARNING_FLAGS /W4)
+else()
+  set(BSPF_WARNING_FLAGS -Wall -Wextra -Wpedantic)
+endif()
 
 function(bspf_enable_warnings dir)
   get_property(targets DIRECTORY ${dir} PROPERTY BUILDSYSTEM_TARGETS)
