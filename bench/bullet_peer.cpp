@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bullet_peer.cpp: see bullet_peer.h.
 #include "bullet_peer.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bullet_peer.h: a Bullet-based peer of the runtime's movement step, for the
 // speed/accuracy sweep (bspf_sweep). Built only when CMake finds Bullet.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspf_crowd_bench: how the body-against-body phase scales. Bodies stand on
 // a flat floor at constant density (one per 1.5 m square, touching
 // neighbours now and then as they walk), 64 to 16,384 of them; each frame's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspf_level_bench: what a compiled level costs the runtime.
 // - open: the median time of openWorld (map and verify) over repeats;
 // - query: for random swept ellipsoids near the level's surfaces (fixed seed),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspf_micro_bench: Google Benchmark microbenchmarks of the collision
 // primitives, one call per iteration (so the time is ns per call):
 //   PreCheck            the planes method's side-value pre-check of one

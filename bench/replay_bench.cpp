@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspf_replay_bench: the movement step on one compiled level, replayed from a
 // recorded crowd, with the broad phase's work per step beside its time.
 //

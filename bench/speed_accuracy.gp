@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # speed_accuracy.gp: the speed/accuracy chart of bspf_sweep's CSV (the rows of
 # level "all": every level pooled). Two panels, x = ns per agent-step (log):
 # left the p99 and the largest penetration (fraction of the body's size),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspf_sweep: speed against accuracy of the runtime's two narrow phases
 // (planes, exact) and of a Bullet peer (bullet_peer.h, when built), over the
 // sample and shared levels and one knob at a time. Writes one CSV

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspc: compiles a mesh into a .bspf collision blob. Parses options into
 // CompileSettings, runs the library, turns every failure into one line on
 // stderr and a non-zero exit.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // brushes.h: the brush oracle, the solids of a level as convex sets of planes
 // (the `.brushes.txt` files beside the sample and shared levels), answering
 // whether a point lies strictly inside any of them. Used by the `walkers`

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The accuracy oracle: exact answers to "how wrong is this position?", for
 // walkers, the tests and the benchmarks. Slow and simple on purpose (double
 // precision, no approximations); never used by the runtime itself.

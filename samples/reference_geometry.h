@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Reference geometry for the judges (the accuracy oracle and the tests):
 // double precision, brute force, and deliberately a different algorithm from
 // the runtime's (bspf/geometry.h), so that a mistake in one is not repeated in

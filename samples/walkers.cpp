@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // walkers: a crowd of ellipsoid bodies random-walking through a compiled
 // level, as a demo of the runtime and a benchmark of its movement step.
 //

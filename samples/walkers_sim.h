@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // walkers_sim.h: the random-walk crowd of the `walkers` sample, header-only so
 // the sample and its test run the very same simulation.
 //

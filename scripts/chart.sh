@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Charts speed against accuracy for the runtime's two narrow phases (planes,
 # exact) and a Bullet peer: installs the benchmark packages when missing,
 # builds bspf_sweep (Release, build-bench), runs it over the sample levels and

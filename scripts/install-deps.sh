@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Installs the Debian 12 packages bspf builds and tests with. Does nothing when
 # all are present; uses sudo only when not run as root.
 set -euo pipefail
 
 packages=(
   cmake g++ make pkg-config
+  ninja-build         # the package tests build consumers with Ninja (tests/package)
   libassimp-dev       # bspc: mesh import (compiler only; the runtime never links it)
   libeigen3-dev       # geometry maths, header-only
   libflatbuffers-dev  # blob format: runtime reader, compiler writer

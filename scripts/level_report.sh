@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Compiles every shared level (3 runs, median stage times), then reports blob
 # size, tree figures, open-and-verify time and broad-phase work per query as
 # Markdown tables. Release build expected in ${BUILD:-build}.

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Generate detailed levels that are not brush-built, for the benchmarks.
 
     python3 scripts/make_detailed_levels.py --out DIR            # full size

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Generate the small sample levels in samples/ and check them.
 
     python3 scripts/make_samples.py            # (re)write samples/*

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Microbenchmarks of the collision primitives (bench/micro_bench.cpp): installs
 # Google Benchmark if needed, builds bspf_micro_bench (Release, in
 # build-bench), runs every benchmark 5 times and prints the medians, ns per

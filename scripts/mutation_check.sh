@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Mutation check: do the tests notice a broken step, query or loader?
 #
 # Applies each mutation of scripts/mutations.txt (one small deliberate

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The performance table of the movement step, in one run, on the arena
 # sample, the shared levels (when ../shared/levels exists) and the three
 # generated detailed levels (scripts/make_detailed_levels.py: terrain,

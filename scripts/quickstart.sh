@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The main job on a bundled level: install what is needed, build (Release),
 # compile samples/arena.obj into out/arena.bspf, describe the blob, then run
 # the walkers sample on it (64 agents, 600 frames, from the level's spawns)

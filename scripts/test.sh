@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The whole test suite: install what is needed; build with AddressSanitizer
 # and UndefinedBehaviorSanitizer and run the tests that feed hostile input;
 # build with ThreadSanitizer and run the threading tests; then build optimised with assertions on and run every test through ctest

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Measures bspc's tree knobs one at a time around the defaults on the shared
 # levels: tree size (references and bytes per triangle) against broad-phase
 # work (leaves and candidate triangles per swept-ellipsoid query, and the

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Runs walkers (64 agents, 600 frames, spawns, brush oracle) on every shared
 # level and the arena sample at 6 and 40 m/s, with each narrow phase
 # (METHODS, default "planes exact"), 3 runs each, and prints a

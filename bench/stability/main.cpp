@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspf_stability: runs every failure-case scene (bench/stability/scenes.h)
 // with both collision methods and prints the table of docs/stability.md as
 // Markdown: per case and method, pass or fail against the tolerances and the

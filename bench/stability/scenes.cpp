@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "stability/scenes.h"
 
 #include <bspc/compile.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The failure cases: small scenes, each built where collision methods are
 // known to fail (thin walls, acute creases, outer corners, seams, slopes at the
 // walkable limit, stairs, far from the origin, crowds, slivers), run for a

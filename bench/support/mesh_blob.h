@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Levels compiled in memory for the benchmarks and the stability scenes.
 #pragma once
 

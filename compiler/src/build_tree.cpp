@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include <bspc/build_tree.h>
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include <bspc/clean.h>
 #include <bspf/world.h>
 

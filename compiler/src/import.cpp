@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include <assimp/DefaultIOStream.h>
 #include <assimp/DefaultIOSystem.h>
 #include <assimp/commonMetaData.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include <bspc/info.h>
 
 #include <iomanip>

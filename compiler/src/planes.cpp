@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include <bspc/planes.h>
 
 namespace bspc {

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include <bspc/settings.h>
 #include <bspc/mesh.h>
 #include <bspf/world.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include <bspc/write.h>
 #include <bspf/world.h>
 #include <fcntl.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The body-against-body phase of stepBodies: a hashed grid of the bodies'
 // positions after the level phase, then, for each body independently, the
 // sum of the pushes from its nearest overlapping bodies (no longer than the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The box test and the pre-checks of the narrow phases, a CandidateBlock at a
 // time (workspace.h): on x86-64, 4 lanes per SSE instruction (SSE2 is part of
 // the baseline every x86-64 CPU has, so no run-time dispatch is needed);

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // CollisionMethod::ExactSweep: exact continuous collision of a swept
 // ellipsoid against triangles. Everything happens in "sphere space", the
 // level scaled by (1/rxz, 1/ry, 1/rxz), where the body is the unit sphere and

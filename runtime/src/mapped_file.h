@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Read-only memory mapping of a whole file (POSIX mmap). Private to the runtime.
 #pragma once
 

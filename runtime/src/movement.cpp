@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The per-frame step: stepBody drives one body through the phases (future
 // velocity, slide against the level, step-up, contact response); stepBodies
 // steps every body, then runs the body-against-body phase.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The per-triangle primitives of the two narrow phases (slide.h), exposed
 // for the microbenchmarks (bench/micro_bench.cpp). Private to the runtime:
 // not installed, not part of the API. The small ones are inline: they run

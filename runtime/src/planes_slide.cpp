@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // CollisionMethod::Planes: the article's six-plane narrow phase and its
 // slide, with the defects fixed that docs/algorithm.md lists.
 #include <Eigen/LU>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include <bspf/query.h>
 
 #include <algorithm>

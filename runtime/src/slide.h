@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The narrow phases of the movement step: each moves a body's centre from
 // `start` towards `desiredEnd` against the level's triangles, sliding along
 // what it meets. Private to the runtime.

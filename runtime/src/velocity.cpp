@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The velocity model of the step: friction, input and gravity before the
 // move (futureVelocity), the contacts' response after it (respondToContacts).
 #include "velocity.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The velocity model of the movement step (stepBody's steps 1 and 3), exposed
 // so the Bullet peer of the benchmarks (bench/bullet_peer.cpp) moves bodies
 // by the very same rules. Private to the runtime: not part of the API.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The narrow phases' working lists (StepScratch::workspace): each slide's
 // candidates with what its tests need precomputed for the body's radii, so
 // an iteration reads one short array and takes no square root per

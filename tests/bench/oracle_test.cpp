@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The accuracy oracle (bench/support/oracle.h) against known answers, and
 // what it says of the two narrow phases.
 #include "oracle.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The failure cases of docs/stability.md, run for both methods: every case
 // must stay safe, and each case's verdict must be the one the document
 // states (a changed verdict means the table, and this list, need updating);

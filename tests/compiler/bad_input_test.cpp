@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The real bspc executable on bad input: it fails with a non-zero exit and one
 // line on stderr naming the file at fault and why, and leaves no output and no
 // temporary file behind; an existing output survives a failed compile intact.

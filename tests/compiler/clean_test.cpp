@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cleanMesh: welding, dropping degenerate, zero-area, duplicate triangles and
 // unused vertices, and refusing input it cannot make sense of.
 #include <bspc/clean.h>

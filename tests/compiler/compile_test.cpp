@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The whole compile: the blob holds the input's triangles with correct planes,
 // every leaf lists every triangle overlapping its cell, output is
 // deterministic, settings act as documented, metadata and the CLI report it.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspc and the loader against hostile paths: planted links at temporary
 // names, outputs that are not regular files, a stats file naming the input
 // or the output, FIFOs given to read, signals during a compile, and a level

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspc's import stage (compiler/src/import.cpp): node transforms.
 #include <bspc/import.h>
 

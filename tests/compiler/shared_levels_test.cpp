@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Every real level in ../shared/levels compiles, verifies and is described.
 #include <bspc/compile.h>
 #include <bspf/query.h>

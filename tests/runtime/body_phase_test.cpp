@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The body-against-body phase (runtime/src/body_phase.cpp) and stepping many
 // bodies on several threads (stepBodies with a ThreadPool, and the phases a
 // game's job system drives itself).

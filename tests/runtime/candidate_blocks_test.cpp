@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The narrow phases' candidate lists (private: runtime/src/workspace.h,
 // candidate_blocks.cpp, slide.h): the SSE masks the step uses must give the
 // same bits as the one-lane-at-a-time reference, the reference must mean

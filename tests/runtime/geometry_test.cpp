@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspf::closestPointOnTriangle (runtime) against the independent reference
 // (samples/reference_geometry.h), region by region and on random points, in
 // float and in double.

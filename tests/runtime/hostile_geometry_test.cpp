@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Blobs built around one hostile triangle beside an ordinary floor: the
 // loader refuses what the step cannot handle (degenerate triangles, planes
 // that disagree with their vertices, coordinates beyond kMaxCoordinate), and

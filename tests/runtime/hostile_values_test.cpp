@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Hostile values at run time, in every build (asserts or not): a body with a
 // NaN or infinite value, a bad dt, radii or settings out of range is not
 // moved, its report says why, and no other body is affected.

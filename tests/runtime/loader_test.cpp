@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The loader: openWorld / viewWorld refuse every bad blob with the right
 // status and a useful message, and view good blobs in place without copying.
 #include <bspc/compile.h>

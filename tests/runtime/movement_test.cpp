@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include <bspf/movement.h>
 
 #include <catch2/catch.hpp>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include <bspf/thread_pool.h>
 
 #include <atomic>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspf::computeTreeStats against figures counted independently: a recursive
 // walk of the tree written here, and worlds whose shape is known by
 // construction.

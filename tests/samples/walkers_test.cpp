@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The walkers sample's simulation (samples/walkers_sim.h) on the sample arena
 // and the shared levels, checked against the brush oracle: no agent centre is
 // ever strictly inside a solid; and the walkers program's --brushes option.

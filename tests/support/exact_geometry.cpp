@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "support/exact_geometry.h"
 
 #include <Eigen/Geometry>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Exact reference geometry for tests (double precision, no tolerances): the
 // oracle the runtime's fast paths are checked against. Built on
 // samples/reference_geometry.h, never on the runtime's own geometry.

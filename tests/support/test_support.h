@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Helpers shared by the tests: paths, small meshes, compiled blobs.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspc/build_tree.h: stage 3, the BSP tree with leaf triangle lists.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspc/clean.h: stage 2, make the mesh fit for collision.
 #pragma once
 

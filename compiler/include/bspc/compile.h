@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspc/compile.h: the whole compile, stage by stage.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspc/import.h: stage 1, read any mesh format assimp knows.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspc/info.h: `bspc --info`, a verified blob described for people.
 #pragma once
 

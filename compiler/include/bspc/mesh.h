@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspc/mesh.h: the triangle mesh passed between compiler stages.
 #pragma once
 

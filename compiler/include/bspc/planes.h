@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspc/planes.h: stage 4, per-triangle collision planes.
 #pragma once
 

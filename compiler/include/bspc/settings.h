@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspc/settings.h: every knob of a compile, with its default, unit and limits.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspc/write.h: stage 5, serialise and write the blob.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspf geometry primitives: small, header-only, free functions.
 //
 // Units are metres throughout. Planes follow the blob's convention (see

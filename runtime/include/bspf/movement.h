@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspf/movement.h: the per-frame movement and collision step.
 //
 // Bodies are axis-aligned ellipsoids (one radius in x and z, one in y) that

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspf/query.h: which parts of a level a moving ellipsoid can touch.
 //
 // Broad phase for the movement step: the BSP leaves whose cells a swept

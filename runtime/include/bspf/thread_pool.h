@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspf/thread_pool.h: a small pool of worker threads for stepping many bodies
 // (the stepBodies overload in movement.h takes one). Games with a job system
 // of their own can ignore it and drive the phases of movement.h themselves.

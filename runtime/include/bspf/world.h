@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspf/world.h: a compiled level (.bspf), mapped read-only and verified.
 //
 // A World never copies geometry: every accessor returns a view into the file
