@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Lays out the labels of the speed/accuracy chart so that none overlaps.
 
 Reads bspf_sweep's CSV (the rows of level "all"), computes where each point

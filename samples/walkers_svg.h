@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // walkers_svg.h: the top-down picture `walkers --svg FILE` draws of a run.
 //
 // Looking down the -Y axis (x to the right, z downwards): the level's

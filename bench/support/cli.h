@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Command-line parsing shared by the benchmark programs: --help prints the
 // usage and exits 0; a bad option or value prints one line naming it, with
 // exit status 2 (as bspc and walkers do).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include <bspf/debug_draw.h>
 #include <bspf/query.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspf/debug_draw.h: what a query or a step looked at, for a game to draw in
 // its own renderer.
 //
