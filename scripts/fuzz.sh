@@ -47,7 +47,7 @@ for target in "${targets[@]}"; do
     "build-fuzz/corpus/$target" "tests/fuzz/corpus/$target" >"build-fuzz/$target.log" 2>&1 ||
     status=$?
   # The figures: the seeds' coverage, the run's, executions and speed.
-  grep -E '^#[0-9]+ +(INITED|DONE)|^stat::(number_of_executed_units|average_exec_per_sec|peak_rss_mb)' \
+  grep -E '^#[0-9]+[[:space:]]+(INITED|DONE)|^stat::(number_of_executed_units|average_exec_per_sec|peak_rss_mb)' \
     "build-fuzz/$target.log" || true
   if [ "$status" -ne 0 ]; then
     tail -n 60 "build-fuzz/$target.log"
