@@ -1,9 +1,9 @@
 // libFuzzer target: a mesh straight into bspc's stages, then the runtime.
 //
 // fuzz_obj reaches the stages through assimp, whose OBJ reader fills a
-// 16 MB buffer for every file: a few hundred inputs a second at best. This
-// target decodes the bytes into a mesh itself, thousands a second, so the
-// clean and tree stages see far more shapes: compileMesh (clean, tree,
+// 16 MB buffer for every file, which dominates its time. This target
+// decodes the bytes into a mesh itself, over ten times as many inputs a
+// second (docs/fuzzing.md), so the clean and tree stages see more shapes: compileMesh (clean, tree,
 // planes, serialise, verification) must throw CompileError or return a blob
 // the runtime accepts, and on that blob queries and steps with both methods
 // must keep their promises (world_checks.h).
