@@ -13,6 +13,8 @@ packages=(
   flatbuffers-compiler # flatc generates the schema header at build time
   libcli11-dev        # command-line parsing for bspc and the samples
   catch2              # test framework (v2 as packaged in Debian 12)
+  clang               # the fuzz targets (scripts/fuzz.sh): libFuzzer needs clang
+  libclang-rt-14-dev  # libFuzzer and the sanitizer runtimes for clang 14
 )
 if [ "${BSPF_WITH_BENCH:-0}" = 1 ]; then
   packages+=(libbenchmark-dev libbullet-dev gnuplot-nox)

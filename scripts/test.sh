@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: MIT
 # The whole test suite: install what is needed; build with AddressSanitizer
 # and UndefinedBehaviorSanitizer and run the tests that feed hostile input;
-# build with ThreadSanitizer and run the threading tests; then build optimised with assertions on and run every test through ctest
+# build with ThreadSanitizer and run the threading tests; fuzz each libFuzzer
+# target for a minute (scripts/fuzz.sh); then build optimised with assertions on and run every test through ctest
 # (its summary closes the output).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -27,6 +28,11 @@ if [ "${BSPF_SKIP_SANITIZERS:-0}" != 1 ]; then
   echo "thread sanitizer run: the threading tests"
   TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" build-tsan/tests/bspf_tests "[threads]"
 fi
+
+# Fuzzing (docs/fuzzing.md): each libFuzzer target for $BSPF_FUZZ_SECONDS
+# seconds (default 60; 0 skips it) from its seed corpus, under AddressSanitizer
+# and UndefinedBehaviorSanitizer. A finding fails the run.
+scripts/fuzz.sh
 
 # Optimised, but with assert() live: tests check contracts too.
 cmake -S . -B build-test -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS_RELEASE="-O2 -g" >/dev/null
