@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Builds the libFuzzer targets (tests/fuzz) with clang, AddressSanitizer and
 # UndefinedBehaviorSanitizer, and runs each for a bounded time from its
 # committed seed corpus (tests/fuzz/corpus/<target>). Fails on any finding
