@@ -77,6 +77,14 @@ int main(int argc, char** argv) {
   app.add_option("--triangle-candidates", settings.tree.triangleCandidates,
                  "Triangle-plane candidates per node")
       ->capture_default_str();
+  app.add_option("--import-timeout", settings.import.timeoutSeconds,
+                 "Seconds the importer may take before it is stopped")
+      ->capture_default_str();
+  std::uint64_t importMemoryMiB = 0;
+  app.add_option("--import-memory", importMemoryMiB,
+                 "MiB of address space the importer may use (0: 1 GiB + 64 x the file size)")
+      ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1} << 40))
+      ->capture_default_str();
   app.add_option("--stats-json", statsJson, "Also write the compile report as JSON to this file");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
@@ -87,6 +95,7 @@ int main(int argc, char** argv) {
     std::cerr << "bspc: error: " << e.what() << " (see bspc --help)\n";
     return 2;
   }
+  settings.import.memoryLimitBytes = importMemoryMiB << 20;
   if (!infoPath.empty()) return runInfo(infoPath);
   if (input.empty() || output.empty()) {
     std::cerr << "bspc: error: need an input mesh and -o OUTPUT.bspf (see bspc --help)\n";
