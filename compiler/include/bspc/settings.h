@@ -39,7 +39,7 @@ struct ImportSettings {
   /// child); beyond it assimp's allocations fail and the compile stops with
   /// "the importer ran out of memory". 0, the default, derives the cap from
   /// the file: 1 GiB plus 64 times its size (an OBJ's import peaks at about
-  /// about 10 times its size: README, "Limits"). Not applied in builds with
+  /// 8 to 10 times its size: README, "Limits"). Not applied in builds with
   /// AddressSanitizer or ThreadSanitizer, whose shadow memory needs far more
   /// address space than any cap.
   std::uint64_t memoryLimitBytes = 0;
