@@ -131,6 +131,16 @@ int main(int argc, char** argv) {
                  "Triangle-plane candidates per node")
       ->type_name("N")
       ->capture_default_str();
+  app.add_option("--import-timeout", settings.import.timeoutSeconds,
+                 "Seconds the importer may take before it is stopped")
+      ->type_name("S")
+      ->capture_default_str();
+  std::uint64_t importMemoryMiB = 0;
+  app.add_option("--import-memory", importMemoryMiB,
+                 "MiB of address space the importer may use (0: 1 GiB + 64 x the file size)")
+      ->type_name("MIB")
+      ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1} << 40))
+      ->capture_default_str();
   app.add_option("--stats-json", statsJson, "Also write the compile report as JSON to this file")
       ->type_name("FILE");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors and warnings");
@@ -173,6 +183,7 @@ command line (the error names the option).)");
     return badValue("--candidates", candidates, "takes axis, triangle or both");
   settings.import.up = axes.at(upLower);
   settings.tree.candidates = candidateKinds.at(candidatesLower);
+  settings.import.memoryLimitBytes = importMemoryMiB << 20;
   if (!infoPath.empty()) return runInfo(infoPath);
   if (input.empty() || output.empty()) {
     std::cerr << "bspc: error: need an input mesh and -o OUTPUT.bspf (see bspc --help)\n";

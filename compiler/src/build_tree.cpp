@@ -147,12 +147,22 @@ class TreeBuilder {
   // The best-scoring split among those that make progress on both sides and
   // pay for themselves: its expected query cost (one node test plus the triangles of each
   // child, weighted by how likely a query reaches the child's cell) is below
-  // the leaf's (all its triangles).
+  // the leaf's (all its triangles). When none pays at the query reach and
+  // the node has more than kDenseNodeTriangles, the same at a reach of at
+  // most a quarter of its cell's longest side: a cell much smaller than the
+  // query reach is seen whole by every query that reaches it, so at that
+  // reach no split of a dense cluster of tiny triangles pays (its
+  // straddlers outweigh the gain), and such leaves grew to thousands of
+  // triangles. At the cell's own scale a split pays unless it lists most
+  // triangles on both sides.
   std::optional<Split> chooseSplit(const std::vector<std::uint32_t>& triangles,
                                    const Box& cell) const {
-    const double n = static_cast<double>(triangles.size());
-    std::optional<Split> best;
-    double bestScore = std::numeric_limits<double>::infinity();
+    // The candidates that make progress on both sides, with their counts.
+    struct Counted {
+      Split split;
+      double frontTotal, backTotal, both;
+    };
+    std::vector<Counted> counted;
     for (const Split& split : candidates(triangles)) {
       std::size_t front = 0, back = 0, both = 0;
       for (const std::uint32_t t : triangles) {
@@ -163,21 +173,31 @@ class TreeBuilder {
         }
       }
       if (front + both == triangles.size() || back + both == triangles.size()) continue;
-      const double frontTotal = double(front + both), backTotal = double(back + both);
-      if (splitCost(cell, split, frontTotal, backTotal) >= n) continue;
-      const double score = settings_.balanceWeight * std::abs(frontTotal - backTotal) / n +
-                           settings_.splitWeight * double(both) / n;
-      if (score < bestScore) {
-        bestScore = score;
-        best = split;
-      }
+      counted.push_back({split, double(front + both), double(back + both), double(both)});
     }
-    return best;
+    const double n = static_cast<double>(triangles.size());
+    auto best = [&](double reach) {
+      std::optional<Split> chosen;
+      double bestScore = std::numeric_limits<double>::infinity();
+      for (const Counted& c : counted) {
+        if (splitCost(cell, c.split, c.frontTotal, c.backTotal, reach) >= n) continue;
+        const double score = settings_.balanceWeight * std::abs(c.frontTotal - c.backTotal) / n +
+                             settings_.splitWeight * c.both / n;
+        if (score < bestScore) {
+          bestScore = score;
+          chosen = c.split;
+        }
+      }
+      return chosen;
+    };
+    std::optional<Split> chosen = best(settings_.queryReach);
+    if (!chosen && triangles.size() > kDenseNodeTriangles)
+      chosen = best(std::min(settings_.queryReach, 0.25 * (cell.high - cell.low).maxCoeff()));
+    return chosen;
   }
 
-  double splitCost(const Box& cell, const Split& split, double frontTotal,
-                   double backTotal) const {
-    const double reach = settings_.queryReach;
+  double splitCost(const Box& cell, const Split& split, double frontTotal, double backTotal,
+                   double reach) const {
     const double whole = cell.reachVolume(reach);
     return 1.0 + (cell.clipped(split, true).reachVolume(reach) * frontTotal +
                   cell.clipped(split, false).reachVolume(reach) * backTotal) /

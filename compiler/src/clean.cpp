@@ -3,6 +3,7 @@
 #include <bspf/world.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -28,32 +29,41 @@ struct CellHash {
   }
 };
 
+// Beyond this many tolerances from 0, a coordinate is keyed by its exact
+// value: a float that large has no other float within a tolerance of it (its
+// neighbours are at least |c| / 2^25 away), so only equal coordinates can weld.
+constexpr double kGridCells = 4294967296.0;  // 2^32
+// Exact keys start here, beyond every grid cell index (at most 2^32 + 1).
+constexpr std::int64_t kExactKeys = std::int64_t(1) << 40;
+
 // Maps every vertex to the first earlier vertex within `tolerance` (itself if
 // none). The result depends only on the input order, never on hash order.
+// Near-linear for every tolerance: each axis of a vertex is keyed either by a
+// grid cell one tolerance wide (so a match lies in the 3 cells around it) or
+// by its exact value (tolerance 0, or far from 0 against the tolerance; a
+// match then has the same value). The vertices kept are more than a
+// tolerance apart, so a key holds a bounded number of them.
 std::vector<std::uint32_t> weld(const std::vector<Eigen::Vector3d>& vertices, double tolerance) {
   std::vector<std::uint32_t> target(vertices.size());
-  // With tolerance 0 only identical positions merge: a cell per position.
-  const double cellSize = tolerance > 0 ? tolerance : 1.0;
   const double tolerance2 = tolerance * tolerance;
   std::unordered_map<CellKey, std::vector<std::uint32_t>, CellHash> cells;
   cells.reserve(vertices.size());
-  // Clamped so huge coordinates over a tiny tolerance neither overflow the
-  // integer nor its neighbours; clamped cells merely share a bucket, and the
-  // distance test still decides every weld.
-  auto cellIndex = [&](double v) {
-    constexpr double kLimit = 4503599627370496.0;  // 2^52
-    return static_cast<std::int64_t>(std::clamp(std::floor(v / cellSize), -kLimit, kLimit));
-  };
-  auto cellOf = [&](const Eigen::Vector3d& p) {
-    return CellKey{cellIndex(p.x()), cellIndex(p.y()), cellIndex(p.z())};
+  // Whether the axis is keyed by value, and the key.
+  auto keyOf = [&](double c, bool& exact) {
+    exact = !(std::abs(c) <= kGridCells * tolerance) || tolerance == 0;
+    if (!exact) return static_cast<std::int64_t>(std::floor(c / tolerance));
+    // -0 and +0 are one position; clean has rounded c to a float already.
+    return kExactKeys + std::bit_cast<std::uint32_t>(static_cast<float>(c) + 0.0f);
   };
   for (std::uint32_t i = 0; i < vertices.size(); ++i) {
     const Eigen::Vector3d& p = vertices[i];
-    const CellKey home = cellOf(p);
+    bool exact[3];
+    const CellKey home{keyOf(p.x(), exact[0]), keyOf(p.y(), exact[1]), keyOf(p.z(), exact[2])};
+    auto reach = [&](int axis) { return exact[axis] ? 0 : 1; };
     std::uint32_t best = i;
-    for (std::int64_t dx = -1; dx <= 1; ++dx)
-      for (std::int64_t dy = -1; dy <= 1; ++dy)
-        for (std::int64_t dz = -1; dz <= 1; ++dz) {
+    for (std::int64_t dx = -reach(0); dx <= reach(0); ++dx)
+      for (std::int64_t dy = -reach(1); dy <= reach(1); ++dy)
+        for (std::int64_t dz = -reach(2); dz <= reach(2); ++dz) {
           const auto it = cells.find({home.x + dx, home.y + dy, home.z + dz});
           if (it == cells.end()) continue;
           for (const std::uint32_t j : it->second)

@@ -32,14 +32,39 @@ void say(const CompileSettings& settings, std::string_view line) {
   if (settings.progress) settings.progress(line);
 }
 
+// Fails when the blob would be larger than the limit: `bytes` is what it
+// would take at least (`least`) or once written.
+void checkBlobBytes(std::uint64_t bytes, bool least, const Mesh& clean,
+                    const LimitSettings& limits) {
+  if (bytes <= limits.maxBlobBytes) return;
+  throw CompileError("too large: its blob would take " + std::string(least ? "at least " : "") +
+                     std::to_string(bytes) + " bytes (" + std::to_string(clean.triangles.size()) +
+                     " triangles, " + std::to_string(clean.vertices.size()) +
+                     " vertices after clean), over the limit of " +
+                     std::to_string(limits.maxBlobBytes) + " bytes; split the level");
+}
+
 std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSettings& settings,
                                              const std::string& sourceName, CompileReport& report) {
+  const LimitSettings& limits = settings.limits;
+  const std::uint64_t peak = kPeakBytesPerTriangle * mesh.triangles.size();
+  if (limits.maxMemoryBytes != 0 && peak > limits.maxMemoryBytes)
+    throw CompileError("too large: its compile would take about " + std::to_string(peak >> 20) +
+                       " MiB of memory (" + std::to_string(mesh.triangles.size()) +
+                       " triangles), over the limit of " +
+                       std::to_string(limits.maxMemoryBytes >> 20) + " MiB; split the level");
   say(settings, "clean");
   const Mesh clean =
       timed(report.seconds.clean, [&] { return cleanMesh(mesh, settings.clean, report.clean); });
+  // Fail fast: the tree can only add to this.
+  checkBlobBytes(minimumBlobBytes(clean.vertices.size(), clean.triangles.size()), true, clean,
+                 limits);
   say(settings, "build tree");
   const BspTree tree = timed(report.seconds.buildTree,
                              [&] { return buildTree(clean, settings.tree, settings.progress); });
+  checkBlobBytes(estimateBlobBytes(clean.vertices.size(), clean.triangles.size(), tree.nodes.size(),
+                                   tree.leaves.size(), tree.leafTriangles.size()),
+                 true, clean, limits);
   say(settings, "precompute planes");
   const auto planes = timed(report.seconds.planes, [&] { return computeTrianglePlanes(clean); });
   say(settings, "serialise");
@@ -47,6 +72,7 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
     return serializeWorld(clean, planes, tree, {sourceName, settings, report.clean});
   });
 
+  checkBlobBytes(blob.size(), false, clean, limits);
   // bspc never writes a blob its own runtime would refuse.
   const bspf::OpenResult opened = bspf::viewWorld(std::as_bytes(std::span(blob)));
   if (!opened)
@@ -98,8 +124,10 @@ CompileReport compileFile(const std::filesystem::path& input, const std::filesys
   CompileReport report;
   try {
     say(settings, "import");
-    const Mesh mesh =
-        timed(report.seconds.import, [&] { return importMesh(input, settings.import); });
+    const Mesh mesh = timed(report.seconds.import, [&] {
+      return settings.import.contained ? importMeshContained(input, settings.import)
+                                       : importMesh(input, settings.import);
+    });
     const std::vector<std::uint8_t> blob =
         compileCleanStages(mesh, settings, input.filename().string(), report);
     report.warnings = mesh.warnings;

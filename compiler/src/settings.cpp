@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
-#include <bspc/settings.h>
 #include <bspc/mesh.h>
+#include <bspc/settings.h>
 #include <bspf/world.h>
 
 #include <cmath>
@@ -34,6 +34,9 @@ void require(bool ok, const char* what) {
 
 void validate(const CompileSettings& s) {
   require(std::isfinite(s.import.scale) && s.import.scale > 0, "scale must be finite and > 0");
+  require(std::isfinite(s.import.timeoutSeconds) && s.import.timeoutSeconds > 0 &&
+              s.import.timeoutSeconds <= 86400,
+          "import timeout must be > 0 and at most 86400 s");
   require(std::isfinite(s.clean.weldTolerance) && s.clean.weldTolerance >= 0 &&
               s.clean.weldTolerance < 1,
           "weld tolerance must be >= 0 and < 1 m");
@@ -51,6 +54,8 @@ void validate(const CompileSettings& s) {
           "query reach must be finite and >= 0");
   require(s.tree.axisCandidatesPerAxis >= 1 && s.tree.axisCandidatesPerAxis <= 64,
           "axis candidates must be 1 to 64");
+  require(s.limits.maxBlobBytes >= 1 && s.limits.maxBlobBytes <= kMaxBlobBytes,
+          "max blob bytes must be 1 to 2^31 - 1");
   require(s.tree.triangleCandidates >= 1 && s.tree.triangleCandidates <= 256,
           "triangle candidates must be 1 to 256");
 }

@@ -86,6 +86,17 @@ std::vector<std::uint8_t> serializeWorld(const Mesh& mesh,
   return {fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()};
 }
 
+std::uint64_t estimateBlobBytes(std::uint64_t vertices, std::uint64_t triangles,
+                                std::uint64_t nodes, std::uint64_t leaves, std::uint64_t entries) {
+  namespace fb = bspf::schema;
+  // The arrays and their 4-byte lengths; the tables, the size prefix and the
+  // build info's strings come on top.
+  return 8 * 4 + vertices * sizeof(fb::Vec3) +
+         triangles * (sizeof(fb::Triangle) + sizeof(fb::TrianglePlanes)) +
+         nodes * sizeof(fb::Node) + leaves * sizeof(fb::Leaf) +
+         entries * (sizeof(std::uint32_t) + sizeof(fb::Box));
+}
+
 namespace {
 
 // The temporaries now on disk, for the signal handler: the only global state

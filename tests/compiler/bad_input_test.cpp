@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cctype>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -328,4 +329,82 @@ TEST_CASE("a failed compile leaves an existing output file byte-identical",
       CHECK(temporaryFiles(dir).empty());
     }
   }
+}
+
+// ============================================ files that crash or hang assimp
+// assimp 5.2 (Debian 12's) loops, crashes or takes all memory on these; bspc
+// imports in a child process (importMeshContained) and answers in bounded
+// time. `timeout 60` fails the test, instead of hanging it, should bspc not.
+
+namespace {
+
+// Runs bspc under `timeout 60`; the seconds it took.
+std::pair<bspf::test::CommandResult, double> runBspcTimed(const std::string& arguments) {
+  const auto start = std::chrono::steady_clock::now();
+  auto r = runBspc("--quiet " + arguments);
+  return {r, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()};
+}
+
+// A glTF 2 scene whose nodes are one chain `depth` deep, a triangle at its
+// end (the buffer inline, base64).
+std::string deepGltf(int depth) {
+  std::string nodes;
+  for (int i = 0; i + 1 < depth; ++i) nodes += "{\"children\":[" + std::to_string(i + 1) + "]},";
+  nodes += "{\"mesh\":0}";
+  // Three float corners (0,0,0) (1,0,0) (0,1,0), base64.
+  return R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[)" + nodes +
+         R"(],"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],)"
+         R"("accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3",)"
+         R"("min":[0,0,0],"max":[1,1,0]}],"bufferViews":[{"buffer":0,"byteLength":36}],)"
+         R"("buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,)"
+         R"(AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}]})";
+}
+
+}  // namespace
+
+TEST_CASE("bspc stops an import that never ends and says so within its timeout",
+          "[compiler][import-contained]") {
+  const fs::path dir = bspf::test::freshTempDir("contained-loop");
+  // 58 bytes: four billion elements of no properties, which assimp's PLY
+  // reader walks one by one without reading a byte (minutes at least).
+  writeText(dir / "loop.ply", "ply\nformat ascii 1.0\nelement vertex 4000000000\nend_header\n");
+  const auto [r, seconds] = runBspcTimed("--import-timeout 2 " + quoted(dir / "loop.ply") + " -o " +
+                                         quoted(dir / "out.bspf"));
+  requireCleanFailure(r, dir / "out.bspf", {{"loop.ply", "longer than 2 s"}, {"import"}});
+  CHECK(seconds < 30);
+}
+
+TEST_CASE("bspc reports an importer that crashes on a glTF node chain 20,000 deep",
+          "[compiler][import-contained]") {
+  const fs::path dir = bspf::test::freshTempDir("contained-deep");
+  // assimp's glTF 2 reader recurses once a node: this overflows its stack.
+  writeText(dir / "deep.gltf", deepGltf(20000));
+  const auto [r, seconds] =
+      runBspcTimed(quoted(dir / "deep.gltf") + " -o " + quoted(dir / "out.bspf"));
+  requireCleanFailure(r, dir / "out.bspf", {{"deep.gltf", "crashed", "signal 11"}, {"importer"}});
+  CHECK(seconds < 30);
+  // The same chain, short, imports: the crash is the depth, not the file.
+  writeText(dir / "short.gltf", deepGltf(50));
+  const auto ok =
+      runBspc("--quiet " + quoted(dir / "short.gltf") + " -o " + quoted(dir / "short.bspf"));
+  INFO(ok.err);
+  CHECK(ok.status == 0);
+  CHECK(fs::exists(dir / "short.bspf"));
+}
+
+TEST_CASE("bspc caps the importer's memory and says when a file needs more",
+          "[compiler][import-contained]") {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  WARN(BSPF_SKIPPED_MARKER ": sanitizer builds do not cap the importer's address space");
+  return;
+#endif
+  const fs::path dir = bspf::test::freshTempDir("contained-memory");
+  // 75 bytes: assimp's PLY reader allocates for a billion vertices before it
+  // finds none (gigabytes, growing, for minutes).
+  writeText(dir / "huge.ply",
+            "ply\nformat ascii 1.0\nelement vertex 1000000000\nproperty float x\nend_header\n");
+  const auto [r, seconds] = runBspcTimed("--import-memory 256 " + quoted(dir / "huge.ply") +
+                                         " -o " + quoted(dir / "out.bspf"));
+  requireCleanFailure(r, dir / "out.bspf", {{"huge.ply", "out of memory", "256 MiB"}, {}});
+  CHECK(seconds < 30);
 }

@@ -6,11 +6,14 @@
 #include <bspc/settings.h>
 #include <bspf/world.h>
 
+#include <algorithm>
 #include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <random>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -157,6 +160,110 @@ TEST_CASE("weld is order-based: each vertex joins the first earlier vertex in re
     CHECK(report.weldedVertices == again.weldedVertices);
     CHECK(report.weldedVertices > 0);
   }
+}
+
+namespace {
+
+// Where each vertex welds to by the definition (the first earlier kept
+// vertex within the tolerance, itself if none), by comparing every pair, on
+// positions rounded to float as clean rounds them; and how many welded.
+std::pair<std::vector<Vector3d>, std::uint32_t> weldedByDefinition(
+    const std::vector<Vector3d>& points, double tolerance) {
+  std::vector<Vector3d> kept, out;
+  std::uint32_t welded = 0;
+  for (const Vector3d& point : points) {
+    // Through a volatile float: GCC 12 at -O2 folds away a double -> float
+    // -> double round trip of two coordinates at once here (vectorised).
+    Vector3d p;
+    for (int k = 0; k < 3; ++k) {
+      volatile float rounded = static_cast<float>(point[k]);
+      p[k] = rounded;
+    }
+    auto match = std::find_if(kept.begin(), kept.end(), [&](const Vector3d& k) {
+      return (k - p).squaredNorm() <= tolerance * tolerance;
+    });
+    const bool found = match != kept.end();
+    out.push_back(found ? *match : p);
+    if (found)
+      ++welded;
+    else
+      kept.push_back(p);
+  }
+  return {out, welded};
+}
+
+// Welds `points` (one fan each) and checks every one landed where the
+// definition says.
+void checkWeldMatchesDefinition(const std::vector<Vector3d>& points, double tolerance) {
+  bspc::Mesh mesh;
+  for (std::size_t i = 0; i < points.size(); ++i) addFan(mesh, points[i], 1.0 + double(i));
+  bspc::CleanReport report;
+  const bspc::Mesh clean = bspc::cleanMesh(mesh, weldingWithin(tolerance), report);
+  const auto [expected, welded] = weldedByDefinition(points, tolerance);
+  REQUIRE(clean.triangles.size() == points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    INFO("point " << i << " tolerance " << tolerance);
+    CHECK(corner(clean, i, 0) == expected[i]);
+  }
+  CHECK(report.weldedVertices == welded);
+  CHECK(welded > 0);
+}
+
+}  // namespace
+
+TEST_CASE("weld joins each vertex to the first earlier one in reach, for every tolerance",
+          "[compiler][clean]") {
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> step(-6, 6);
+  SECTION("a lattice with jitter at the default and a large tolerance") {
+    for (const double tolerance : {1e-4, 0.01, 0.5}) {
+      std::vector<Vector3d> points;
+      for (int i = 0; i < 600; ++i)
+        points.emplace_back(Vector3d(step(rng), step(rng), step(rng)) * tolerance * 0.7);
+      checkWeldMatchesDefinition(points, tolerance);
+    }
+  }
+  SECTION("tolerance 0: exactly equal positions only, -0 equal to +0") {
+    std::vector<Vector3d> points;
+    for (int i = 0; i < 600; ++i)
+      points.emplace_back(Vector3d(step(rng), step(rng), step(rng)) * 1e-3);
+    points.emplace_back(-0.0, 0.0, -0.0);
+    points.emplace_back(0.0, -0.0, 0.0);
+    points.emplace_back(std::nextafter(0.0f, 1.0f), 0.0, 0.0);  // the nearest float: kept
+    checkWeldMatchesDefinition(points, 0);
+  }
+  SECTION("tiny tolerances far from the origin: coordinates keyed by value") {
+    // Near 5e4 m floats are 4 mm apart, so there only equal coordinates can
+    // weld; near 0 a 1e-12 m tolerance still reaches neighbours.
+    for (const double tolerance : {1e-12, 1e-30, 1e-300}) {
+      std::vector<Vector3d> points;
+      for (int i = 0; i < 600; ++i)
+        points.emplace_back(5e4 + step(rng) * 0.002, step(rng) * 0.7e-12, -3e4 + step(rng) * 0.003);
+      checkWeldMatchesDefinition(points, tolerance);
+    }
+  }
+}
+
+TEST_CASE("weld tolerance 0 merges the shared corners of a dense grid", "[compiler][clean]") {
+  // 150 x 150 quads in one square metre, each with its own four corners (as
+  // an importer that does not share vertices gives them): every corner
+  // inside the grid is four equal positions, which become one.
+  const int n = 150;
+  bspc::Mesh mesh;
+  for (int z = 0; z < n; ++z)
+    for (int x = 0; x < n; ++x) {
+      const auto base = static_cast<std::uint32_t>(mesh.vertices.size());
+      for (const auto& [dx, dz] : {std::pair{0, 0}, {1, 0}, {0, 1}, {1, 1}})
+        mesh.vertices.emplace_back(double(x + dx) / n, 0.001 * ((x + dx + z + dz) % 3),
+                                   double(z + dz) / n);
+      mesh.triangles.push_back({base, base + 2, base + 1});
+      mesh.triangles.push_back({base + 1, base + 2, base + 3});
+    }
+  bspc::CleanReport report;
+  const bspc::Mesh clean = bspc::cleanMesh(mesh, weldingWithin(0), report);
+  CHECK(clean.vertices.size() == std::size_t(n + 1) * (n + 1));
+  CHECK(report.weldedVertices == 4 * n * n - (n + 1) * (n + 1));
+  CHECK(clean.triangles.size() == mesh.triangles.size());
 }
 
 TEST_CASE("clean rounds positions to float as the blob stores them", "[compiler][clean]") {

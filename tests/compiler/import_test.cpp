@@ -148,3 +148,40 @@ TEST_CASE(
     REQUIRE(mesh.warnings.empty());
   }
 }
+
+TEST_CASE("the contained import gives the in-process import's mesh bit for bit",
+          "[compiler][import]") {
+  bspc::ImportSettings settings;
+  settings.up = bspc::UpAxis::Z;
+  settings.scale = 0.03125;
+  for (const std::filesystem::path& path :
+       {bspf::test::samplesDir() / "arena.obj",
+        writeTwoNodeGltf("import-contained", R"("scale": [-1, 1, 1])")}) {
+    INFO(path);
+    const bspc::Mesh direct = bspc::importMesh(path, settings);
+    const bspc::Mesh contained = bspc::importMeshContained(path, settings);
+    REQUIRE(contained.vertices.size() == direct.vertices.size());
+    REQUIRE(contained.triangles == direct.triangles);
+    CHECK(std::memcmp(contained.vertices.data(), direct.vertices.data(),
+                      direct.vertices.size() * sizeof(direct.vertices[0])) == 0);
+  }
+}
+
+TEST_CASE("the contained import reports the importer's own errors as importMesh does",
+          "[compiler][import]") {
+  const std::filesystem::path dir = bspf::test::freshTempDir("import-contained-error");
+  std::ofstream(dir / "points.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  std::string direct, contained;
+  try {
+    bspc::importMesh(dir / "points.obj", {});
+  } catch (const bspc::CompileError& e) {
+    direct = e.what();
+  }
+  try {
+    bspc::importMeshContained(dir / "points.obj", {});
+  } catch (const bspc::CompileError& e) {
+    contained = e.what();
+  }
+  CHECK_FALSE(direct.empty());
+  CHECK(contained == direct);
+}

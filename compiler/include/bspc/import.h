@@ -20,4 +20,17 @@ namespace bspc {
 /// again), and the mesh's warnings say so.
 Mesh importMesh(const std::filesystem::path& path, const ImportSettings& settings);
 
+/// importMesh in a child process, so that no file can crash, hang or exhaust
+/// this one: the child (made by fork) imports and sends the mesh back over a
+/// pipe, bit for bit (the same mesh as importMesh). It runs with an address
+/// space cap (settings.memoryLimitBytes) and a CPU time limit, and is killed
+/// when it runs longer than settings.timeoutSeconds or this process dies.
+/// Throws CompileError as importMesh does, and also: "importer crashed
+/// (signal N)" when the importer dies by a signal (a crash, an abort),
+/// "import took longer than N s", "the importer ran out of memory (cap N
+/// MiB)". Safe to call from a program with other threads, as long as none
+/// holds a lock that the import needs (assimp's allocations go through
+/// malloc, which fork makes safe).
+Mesh importMeshContained(const std::filesystem::path& path, const ImportSettings& settings);
+
 }  // namespace bspc

@@ -25,6 +25,25 @@ struct ImportSettings {
   UpAxis up = UpAxis::Y;
   /// Metres per source unit (0.03125 for Quake units). Must be finite and > 0.
   double scale = 1.0;
+  /// Whether compileFile runs the importer in a child process
+  /// (importMeshContained), so that a file which crashes or hangs assimp,
+  /// or makes it take all memory, fails the compile with one line instead.
+  /// false imports in this process (importMesh), for callers that contain
+  /// it themselves (fuzzers, tests of the import itself).
+  bool contained = true;
+  /// Seconds of wall-clock time (and of CPU time) the contained import may
+  /// take before its child is killed: "import of X took longer than N s".
+  /// Finite, > 0 and at most 86400. A million-triangle OBJ imports in a few
+  /// seconds; the default leaves room for the largest level a blob can hold.
+  double timeoutSeconds = 120;
+  /// Bytes of address space the contained import may use (RLIMIT_AS on its
+  /// child); beyond it assimp's allocations fail and the compile stops with
+  /// "the importer ran out of memory". 0, the default, derives the cap from
+  /// the file: 1 GiB plus 64 times its size (an OBJ's import peaks at about
+  /// 8 to 10 times its size: README, "Limits"). Not applied in builds with
+  /// AddressSanitizer or ThreadSanitizer, whose shadow memory needs far more
+  /// address space than any cap.
+  std::uint64_t memoryLimitBytes = 0;
 };
 
 struct CleanSettings {
@@ -59,7 +78,10 @@ struct TreeSettings {
   /// plane test plus the triangles of the children, each weighted by how
   /// likely a query of this reach overlaps the child's cell, costs less than
   /// testing all the node's triangles. Larger values stop splitting sooner
-  /// (fewer, fuller leaves); 0 splits as long as the cells shrink. >= 0.
+  /// (fewer, fuller leaves); 0 splits as long as the cells shrink. A node of
+  /// more than kDenseNodeTriangles (build_tree.h) that no split pays for at
+  /// this reach is judged again at its cell's own scale, so dense clusters
+  /// of tiny triangles still get small leaves. >= 0.
   double queryReach = 1.0;
   /// Axis-aligned candidates per axis (quantiles of centroids). 1 to 64.
   std::uint32_t axisCandidatesPerAxis = 7;
@@ -67,10 +89,38 @@ struct TreeSettings {
   std::uint32_t triangleCandidates = 24;
 };
 
+/// The most a blob can hold: FlatBuffers' limit, 2^31 - 1 bytes (just under
+/// 2 GiB). The loader refuses anything larger.
+inline constexpr std::uint64_t kMaxBlobBytes = (std::uint64_t(1) << 31) - 1;
+
+/// Peak memory of a compile (import excluded: it has its own cap, see
+/// ImportSettings::memoryLimitBytes), bytes per input triangle: 743 measured
+/// with /usr/bin/time -v on a generated 2-million-triangle grid (README,
+/// "Limits"), rounded up. The estimate
+/// LimitSettings::maxMemoryBytes is checked against.
+inline constexpr std::uint64_t kPeakBytesPerTriangle = 750;
+
+/// Limits checked early, so an input too large fails in seconds with one
+/// line, not after minutes of work (README, "Limits").
+struct LimitSettings {
+  /// Largest blob to write, bytes: 1 to kMaxBlobBytes (the default). Checked
+  /// right after clean against the bytes every triangle and vertex takes in
+  /// a blob whatever the tree (minimumBlobBytes in write.h: about 152 a
+  /// triangle plus 12 a vertex, so about 14 million triangles at most),
+  /// again once the tree is built, and on the blob itself.
+  std::uint64_t maxBlobBytes = kMaxBlobBytes;
+  /// Largest peak memory the compile may take, bytes; 0, the default, sets
+  /// no limit beyond what maxBlobBytes implies (about 10.5 GB at the
+  /// largest blob). Checked right after import against
+  /// kPeakBytesPerTriangle times the imported triangles.
+  std::uint64_t maxMemoryBytes = 0;
+};
+
 struct CompileSettings {
   ImportSettings import;
   CleanSettings clean;
   TreeSettings tree;
+  LimitSettings limits;
   /// Called with a one-line status now and then during long stages; may be
   /// empty. bspc prints it on stderr when that is a terminal.
   std::function<void(std::string_view)> progress;

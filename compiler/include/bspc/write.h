@@ -29,6 +29,17 @@ std::vector<std::uint8_t> serializeWorld(const Mesh& mesh,
                                          const std::vector<bspf::schema::TrianglePlanes>& planes,
                                          const BspTree& tree, const BlobMetadata& metadata);
 
+/// The bytes of the arrays of a blob of these counts (vertices, triangles,
+/// tree nodes, leaves, leaf entries) as serializeWorld lays it out: the
+/// blob is larger by its tables and build info (a few hundred bytes). With
+/// no nodes, one leaf and one entry a triangle, it is less than any blob of
+/// that mesh can be: minimumBlobBytes.
+std::uint64_t estimateBlobBytes(std::uint64_t vertices, std::uint64_t triangles,
+                                std::uint64_t nodes, std::uint64_t leaves, std::uint64_t entries);
+inline std::uint64_t minimumBlobBytes(std::uint64_t vertices, std::uint64_t triangles) {
+  return estimateBlobBytes(vertices, triangles, 0, 1, triangles);
+}
+
 /// An output file being written: bytes go to a temporary file beside `path`
 /// (".NAME.tmp-" and 12 random characters, created with O_EXCL and
 /// O_NOFOLLOW, so it never opens an existing file or follows a planted
