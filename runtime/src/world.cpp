@@ -102,6 +102,9 @@ bool checkGeometry(const schema::World& w, Checker& check) {
   if (!w.bounds_min() || !w.bounds_max() || !Checker::finite(*w.bounds_min()) ||
       !Checker::finite(*w.bounds_max()))
     return check.fail("bounds are missing or not finite");
+  const schema::Vec3 &low = *w.bounds_min(), &high = *w.bounds_max();
+  if (!(low.x() <= high.x() && low.y() <= high.y() && low.z() <= high.z()))
+    return check.fail("bounds are inverted (bounds_min above bounds_max on an axis)");
   if (w.metres_per_unit() != 1.0f || w.up_axis() != schema::UpAxis::Y)
     return check.fail("units are not metres with Y up");
   if (triangles->size() == 0) return check.fail("no triangles");

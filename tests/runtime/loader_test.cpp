@@ -998,6 +998,10 @@ TEST_CASE("Semantic violations are Malformed with a message saying what is wrong
          c.boundsMax = schema::Vec3(1, std::numeric_limits<float>::quiet_NaN(), 1);
        },
        "bounds"},
+      // A game querying the level's box (or placing bodies in it) would
+      // break a query's precondition with it.
+      {"inverted bounds", [](Content& c) { std::swap(c.boundsMin, c.boundsMax); },
+       "bounds are inverted"},
       {"units other than metres", [](Content& c) { c.metresPerUnit = 0.0254f; }, "metres"},
       {"Z up", [](Content& c) { c.upAxis = schema::UpAxis::Z; }, "Y up"},
       {"tree_depth disagreeing with the tree", [](Content& c) { c.treeDepth += 1; }, "tree_depth"},
