@@ -15,6 +15,11 @@ packages=(
 if [ "${BSPF_WITH_BENCH:-0}" = 1 ]; then
   packages+=(libbenchmark-dev libbullet-dev gnuplot-nox)
 fi
+# scripts/cross-windows.sh: the mingw-w64 cross compiler (posix threads, for
+# std::thread) and wine to run its programs.
+if [ "${BSPF_WITH_WINDOWS:-0}" = 1 ]; then
+  packages+=(g++-mingw-w64-x86-64-posix wine wine64)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -1,5 +1,11 @@
 #include <bspc/write.h>
 #include <bspf/world.h>
+
+#include <limits>
+
+// The output files (PendingFile) are POSIX: a Windows build of this library
+// (tests/windows) has serializeWorld only.
+#ifndef _WIN32
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -9,8 +15,8 @@
 #include <climits>
 #include <csignal>
 #include <cstring>
-#include <limits>
 #include <random>
+#endif
 
 #ifndef BSPF_VERSION
 #define BSPF_VERSION "unknown"
@@ -84,6 +90,8 @@ std::vector<std::uint8_t> serializeWorld(const Mesh& mesh,
   fbb.FinishSizePrefixed(world, bspf::kFileIdentifier);
   return {fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()};
 }
+
+#ifndef _WIN32
 
 namespace {
 
@@ -223,5 +231,7 @@ void removeTemporariesOnSignal() {
     ::sigaction(signal, &action, nullptr);
   }
 }
+
+#endif  // _WIN32
 
 }  // namespace bspc
