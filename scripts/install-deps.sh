@@ -20,6 +20,10 @@ fi
 if [ "${BSPF_WITH_WINDOWS:-0}" = 1 ]; then
   packages+=(g++-mingw-w64-x86-64-posix wine wine64)
 fi
+# scripts/clang-build.sh: the whole project built with clang too.
+if [ "${BSPF_WITH_CLANG:-0}" = 1 ]; then
+  packages+=(clang)
+fi
 
 missing=()
 for p in "${packages[@]}"; do
