@@ -19,6 +19,15 @@ packages=(
 if [ "${BSPF_WITH_BENCH:-0}" = 1 ]; then
   packages+=(libbenchmark-dev libbullet-dev gnuplot-nox)
 fi
+# scripts/cross-windows.sh: the mingw-w64 cross compiler (posix threads, for
+# std::thread) and wine to run its programs.
+if [ "${BSPF_WITH_WINDOWS:-0}" = 1 ]; then
+  packages+=(g++-mingw-w64-x86-64-posix wine wine64)
+fi
+# scripts/clang-build.sh: the whole project built with clang too.
+if [ "${BSPF_WITH_CLANG:-0}" = 1 ]; then
+  packages+=(clang)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -3,13 +3,18 @@
 # The whole test suite: install what is needed; build with AddressSanitizer
 # and UndefinedBehaviorSanitizer and run the tests that feed hostile input;
 # build with ThreadSanitizer and run the threading tests; fuzz each libFuzzer
-# target for a minute (scripts/fuzz.sh); then build optimised with assertions on and run every test through ctest
-# (its summary closes the output).
+# target for a minute (scripts/fuzz.sh); build everything with clang and run
+# its tests (scripts/clang-build.sh); cross-compile the runtime and its tests
+# for Windows and run them under wine (scripts/cross-windows.sh); then build
+# optimised with assertions on and run every test through ctest (its summary
+# closes the output).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # With the benchmark packages, so the Bullet peer and the microbenchmarks are
 # built, and the sweep's smoke test runs, too.
-BSPF_WITH_BENCH=1 scripts/install-deps.sh
+# The clang, mingw-w64 and wine packages for the ports below, in the same
+# install.
+BSPF_WITH_BENCH=1 BSPF_WITH_WINDOWS=1 BSPF_WITH_CLANG=1 scripts/install-deps.sh
 jobs="$(nproc)"
 
 if [ "${BSPF_SKIP_SANITIZERS:-0}" != 1 ]; then
@@ -37,4 +42,13 @@ scripts/fuzz.sh
 # Optimised, but with assert() live: tests check contracts too.
 cmake -S . -B build-test -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS_RELEASE="-O2 -g" >/dev/null
 cmake --build build-test -j"$jobs"
+
+if [ "${BSPF_SKIP_PORTS:-0}" != 1 ]; then
+  # Every target built with clang, warnings as errors, and its tests run.
+  timeout 1500 scripts/clang-build.sh
+  # The runtime and its tests cross-compiled for Windows and run under wine;
+  # this build's bspc compiles the sample levels they open.
+  BSPC=build-test/compiler/bspc timeout 900 scripts/cross-windows.sh
+fi
+
 (cd build-test && ctest -j"$jobs" --output-on-failure)

@@ -1,6 +1,12 @@
 // SPDX-License-Identifier: MIT
 #include <bspc/write.h>
 #include <bspf/world.h>
+
+#include <limits>
+
+// The output files (PendingFile) are POSIX: a Windows build of this library
+// (tests/windows) has serializeWorld only.
+#ifndef _WIN32
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -10,8 +16,8 @@
 #include <climits>
 #include <csignal>
 #include <cstring>
-#include <limits>
 #include <random>
+#endif
 
 #ifndef BSPF_VERSION
 #define BSPF_VERSION "unknown"
@@ -96,6 +102,8 @@ std::uint64_t estimateBlobBytes(std::uint64_t vertices, std::uint64_t triangles,
          nodes * sizeof(fb::Node) + leaves * sizeof(fb::Leaf) +
          entries * (sizeof(std::uint32_t) + sizeof(fb::Box));
 }
+
+#ifndef _WIN32
 
 namespace {
 
@@ -235,5 +243,7 @@ void removeTemporariesOnSignal() {
     ::sigaction(signal, &action, nullptr);
   }
 }
+
+#endif  // _WIN32
 
 }  // namespace bspc

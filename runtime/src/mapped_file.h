@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
-// Read-only memory mapping of a whole file (POSIX mmap). Private to the runtime.
+// Read-only memory mapping of a whole file: POSIX mmap, or on Windows a
+// file mapping view (CreateFileMapping, MapViewOfFile). Private to the runtime.
 #pragma once
 
 #include <cstddef>
@@ -25,6 +26,11 @@ class MappedFile {
   MappedFile(const std::byte* data, std::size_t size) : data_(data), size_(size) {}
   const std::byte* data_;
   std::size_t size_;
+#ifdef _WIN32
+  // The file's handle, open (refusing writers) while mapped. On POSIX the
+  // mapping alone keeps the file.
+  void* file_ = nullptr;
+#endif
 };
 
 }  // namespace bspf::detail

@@ -368,11 +368,15 @@ bool isUsableTriangle(const schema::Vec3& a, const schema::Vec3& b, const schema
 }
 
 OpenResult openWorld(const std::filesystem::path& path) {
+  // The name in UTF-8 on every system: path::string() would convert a
+  // Windows path to the active code page, and throw for a character it lacks.
+  const std::u8string utf8 = path.u8string();
+  const std::string name(utf8.begin(), utf8.end());
   std::string error;
   std::shared_ptr<detail::MappedFile> file = detail::MappedFile::open(path, error);
-  if (!file) return refuse(LoadStatus::CannotOpen, path.string(), "cannot open: " + error);
+  if (!file) return refuse(LoadStatus::CannotOpen, name, "cannot open: " + error);
   const std::span<const std::byte> bytes = file->bytes();
-  return verifyAndView(bytes, std::move(file), path.string());
+  return verifyAndView(bytes, std::move(file), name);
 }
 
 OpenResult viewWorld(std::span<const std::byte> bytes) {

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: MIT
 #include "support/test_support.h"
 
+#ifndef _WIN32
 #include <sys/wait.h>
+#endif
 
 #include <array>
 #include <cstdio>
@@ -17,12 +19,16 @@ std::filesystem::path sharedLevelsDir() {
   if (const char* fromEnvironment = std::getenv("BSPF_SHARED_LEVELS")) return fromEnvironment;
   const std::filesystem::path besideSources = BSPF_SHARED_LEVELS_DIR;
   if (std::filesystem::exists(besideSources)) return besideSources;
+#ifdef _WIN32
+  return besideSources;
+#else
   // A project folder (sources and build/ inside) moved since the build:
   // PROJECT/build/tests/bspf_tests, levels in PROJECT/../shared/levels.
   std::error_code error;
   const std::filesystem::path executable = std::filesystem::read_symlink("/proc/self/exe", error);
   if (error) return besideSources;
   return executable.parent_path() / "../../../shared/levels";
+#endif
 }
 
 bspc::Mesh boxMesh(const Eigen::Vector3d& low, const Eigen::Vector3d& high) {
@@ -49,8 +55,15 @@ std::vector<std::uint8_t> compile(const bspc::Mesh& mesh, const bspc::CompileSet
 }
 
 bspf::World compileSample(const std::string& name) {
+#ifdef BSPF_SAMPLE_BLOBS_DIR
+  // The Windows build has no importer: the host's bspc compiled the samples
+  // with default settings (scripts/cross-windows.sh).
+  const std::filesystem::path blob =
+      std::filesystem::path(BSPF_SAMPLE_BLOBS_DIR) / (name + ".bspf");
+#else
   const std::filesystem::path blob = freshTempDir("sample") / (name + ".bspf");
   bspc::compileFile(samplesDir() / (name + ".obj"), blob, {});
+#endif
   bspf::OpenResult opened = bspf::openWorld(blob);
   if (!opened) throw std::runtime_error(opened.message);
   return *opened.world;
@@ -102,7 +115,11 @@ CommandResult run(const std::string& command) {
   const std::string full = command + " >" + (dir / "out").string() + " 2>" + (dir / "err").string();
   CommandResult r;
   const int raw = std::system(full.c_str());
+#ifdef _WIN32
+  r.status = raw;  // the command's exit code itself
+#else
   r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+#endif
   auto slurp = [](const std::filesystem::path& p) {
     std::ifstream in(p);
     std::stringstream s;

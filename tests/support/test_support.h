@@ -68,7 +68,8 @@ struct CompiledMesh {
 };
 
 /// Compiles samples/NAME.obj with default settings into a temp directory
-/// and opens it (the World keeps its mapping alive).
+/// and opens it (the World keeps its mapping alive). In the Windows build
+/// (tests/windows), opens the host bspc's blob from BSPF_SAMPLE_BLOBS_DIR.
 bspf::World compileSample(const std::string& name);
 
 /// A fresh empty directory under the system temp dir, removed with

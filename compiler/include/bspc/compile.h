@@ -39,7 +39,8 @@ struct CompileReport {
 /// renamed into place first, the blob last). Throws CompileError with a
 /// one-line message naming the file at fault (an output that is not a
 /// regular file, a stats path naming the input or the output, ...); the
-/// outputs are then left as they were.
+/// outputs are then left as they were. POSIX only: not in a Windows build of
+/// the library (tests/windows), which has compileMesh.
 CompileReport compileFile(const std::filesystem::path& input, const std::filesystem::path& output,
                           const CompileSettings& settings,
                           const std::filesystem::path& statsJson = {});

@@ -46,7 +46,9 @@ inline std::uint64_t minimumBlobBytes(std::uint64_t vertices, std::uint64_t tria
 /// link), which commit() flushes to disk and renames over `path`. Until
 /// then `path` is untouched; a PendingFile destroyed uncommitted removes its
 /// temporary. While it exists its temporary is listed for the handler of
-/// removeTemporariesOnSignal.
+/// removeTemporariesOnSignal. POSIX only, like writeFileAtomically and
+/// removeTemporariesOnSignal: a Windows build of the library (tests/windows)
+/// declares them but does not define them.
 class PendingFile {
  public:
   /// Creates the temporary. Throws CompileError naming `path` when `path`

@@ -144,14 +144,22 @@ struct OpenResult {
 
 /// Maps `path` read-only and verifies it (FlatBuffers verifier, then semantic
 /// checks: see LoadStatus::Malformed). Cost: one pass over the blob, no copy of
-/// geometry. Never throws for bad bytes; returns a status instead. Never
-/// blocks: a FIFO, device or socket is refused (CannotOpen, "not a regular
-/// file") without waiting for a writer.
+/// geometry. Never throws for bad bytes; returns a status instead. A missing
+/// or unreadable file is CannotOpen with the system's reason; a directory,
+/// FIFO, device or socket is CannotOpen, "not a regular file", refused
+/// without waiting for a writer. The message names the path in UTF-8.
+///
+/// POSIX systems map the file with mmap. Windows maps it with CreateFileW,
+/// CreateFileMappingW and MapViewOfFile: the path's native UTF-16 form is
+/// opened, so any Unicode name works (make the path from UTF-8 text through
+/// std::u8string or char8_t: MSVC reads a plain std::string in the active
+/// code page). A console, NUL or pipe there is "not a regular file". A
+/// platform with no file mapping can read the file itself and use viewWorld.
 ///
 /// Contract: the file must not be modified in place while a World made from
 /// it (or any copy) is alive. The World reads the mapped pages of the file
 /// itself, verified once at open: a file truncated under it kills the
-/// process with SIGBUS on the next read, and bytes written into it change
+/// process with SIGBUS on the next read (POSIX), and bytes written into it change
 /// the level under the running game, unverified. Replace a level instead,
 /// the way bspc writes one: write the new file beside it and rename() it
 /// over the old path. The open World keeps the old file's pages (the old
@@ -160,6 +168,14 @@ struct OpenResult {
 /// only when the open succeeded (keep the old one otherwise); release the
 /// old World once no thread steps against it. Copying a level with `cp`
 /// onto an open path writes in place: copy to a temporary name, then `mv`.
+///
+/// On Windows the World keeps the file open while it or any copy lives,
+/// shared with readers and deleters but not writers: a program that opens
+/// the file to write it fails (sharing violation), so the level cannot
+/// change under the game. Windows refuses to truncate a mapped file, and may
+/// refuse to delete or replace it (wine allows deleting: the name then stays
+/// until the last copy is gone). Reload from a new file name, or release
+/// every World of the level before replacing its file.
 OpenResult openWorld(const std::filesystem::path& path);
 
 /// Verifies caller-owned bytes and views them in place. The bytes must stay
