@@ -2,6 +2,7 @@
 #include <bspc/build_tree.h>
 #include <bspc/compile.h>
 #include <bspc/import.h>
+#include <bspc/mesh_checks.h>
 #include <bspc/planes.h>
 #include <bspc/write.h>
 
@@ -59,6 +60,8 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
   // Fail fast: the tree can only add to this.
   checkBlobBytes(minimumBlobBytes(clean.vertices.size(), clean.triangles.size()), true, clean,
                  limits);
+  report.warnings = mesh.warnings;
+  for (std::string& warning : meshWarnings(clean)) report.warnings.push_back(std::move(warning));
   say(settings, "build tree");
   const BspTree tree = timed(report.seconds.buildTree,
                              [&] { return buildTree(clean, settings.tree, settings.progress); });
@@ -134,7 +137,6 @@ CompileReport compileFile(const std::filesystem::path& input, const std::filesys
     });
     const std::vector<std::uint8_t> blob =
         compileCleanStages(mesh, settings, input.filename().string(), report);
-    report.warnings = mesh.warnings;
     timed(report.seconds.write, [&] { blobFile.write(blob); });
   } catch (const CompileError& e) {
     const std::string what = e.what();

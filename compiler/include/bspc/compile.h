@@ -26,8 +26,9 @@ struct CompileReport {
   /// Figures of the tree as the runtime sees it (the blob is verified).
   bspf::TreeStats tree;
   std::uint32_t triangles = 0;
-  /// The import's warnings (Mesh::warnings), one line each, without the
-  /// file's name.
+  /// The import's warnings (Mesh::warnings), then the cleaned mesh's
+  /// (meshWarnings: inside-out pieces, a size that suggests the wrong unit),
+  /// one line each, without the file's name.
   std::vector<std::string> warnings;
 };
 
