@@ -59,7 +59,8 @@ enum class CollisionMethod {
   /// Exact continuous collision: in the space where the ellipsoid is the unit
   /// sphere, the earliest time of impact against each candidate's face, edges
   /// and corners; the body advances to the contact, keeps `skin` along the
-  /// contact normal, and slides the rest of the move along the tangent plane.
+  /// contact normal, and slides the rest of the move along the contact's
+  /// tangent plane in world space (a step's edge met steep stops it as a wall).
   /// A body that starts in penetration is first pushed out.
   ExactSweep,
 };
