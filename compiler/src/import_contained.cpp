@@ -103,6 +103,15 @@ void sendMessage(int fd, Reply kind, const std::string& text) {
         !writeAll(fd, mesh.vertices.data(), mesh.vertices.size() * sizeof(Eigen::Vector3d)) ||
         !writeAll(fd, mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0])))
       status = 1;
+    // Then the import's warnings: a count, and each as a length and text.
+    const auto warningCount = static_cast<std::uint32_t>(mesh.warnings.size());
+    if (status == 0 && !writeAll(fd, &warningCount, sizeof warningCount)) status = 1;
+    for (const std::string& warning : mesh.warnings) {
+      const auto length = static_cast<std::uint32_t>(warning.size());
+      if (status == 0 &&
+          (!writeAll(fd, &length, sizeof length) || !writeAll(fd, warning.data(), warning.size())))
+        status = 1;
+    }
   } catch (const CompileError& e) {
     // assimp turns an exception inside an importer into its error string.
     const bool memory = std::string_view(e.what()).find("bad_alloc") != std::string_view::npos;
@@ -263,6 +272,16 @@ Mesh importMeshContained(const std::filesystem::path& path, const ImportSettings
   mesh.triangles.resize(header.triangles);
   child.read(mesh.vertices.data(), mesh.vertices.size() * sizeof(Eigen::Vector3d));
   child.read(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));
+  std::uint32_t warningCount = 0;
+  child.read(&warningCount, sizeof warningCount);
+  if (warningCount > 1024) throw CompileError("the importer sent a malformed reply");
+  for (std::uint32_t k = 0; k < warningCount; ++k) {
+    std::uint32_t length = 0;
+    child.read(&length, sizeof length);
+    if (length > (1u << 20)) throw CompileError("the importer sent a malformed reply");
+    std::string& warning = mesh.warnings.emplace_back(length, '\0');
+    child.read(warning.data(), warning.size());
+  }
   child.finish();
   return mesh;
 }

@@ -167,6 +167,16 @@ TEST_CASE("the contained import gives the in-process import's mesh bit for bit",
   }
 }
 
+TEST_CASE("the contained import carries the import's warnings back", "[compiler][import]") {
+  bspc::ImportSettings settings;
+  settings.up = bspc::UpAxis::Z;
+  const std::filesystem::path zUp = writeCollada("import-contained-warning", "Z_UP");
+  const bspc::Mesh direct = bspc::importMesh(zUp, settings);
+  const bspc::Mesh contained = bspc::importMeshContained(zUp, settings);
+  REQUIRE(direct.warnings.size() == 1);
+  CHECK(contained.warnings == direct.warnings);
+}
+
 TEST_CASE("the contained import reports the importer's own errors as importMesh does",
           "[compiler][import]") {
   const std::filesystem::path dir = bspf::test::freshTempDir("import-contained-error");
