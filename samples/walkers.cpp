@@ -4,7 +4,7 @@
 //
 //   walkers LEVEL.bspf [--spawns FILE] [--agents N] [--frames F] [--speed M_PER_S]
 //           [--seed K] [--dt S] [--radius-xz R] [--radius-y R] [--method planes|exact]
-//           [--step-height M] [--threads N]
+//           [--step-height M] [--step-down M] [--threads N]
 //           [--trace OUT.csv] [--svg OUT.svg] [--json]
 //           [--brushes FILE]
 //
@@ -118,6 +118,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--step-height", options.stepHeight,
                  "Highest ledge a walking agent steps up onto, m (0: off, as in the article)")
+      ->capture_default_str();
+  app.add_option("--step-down", options.stepDown,
+                 "Deepest drop a walking agent is set down onto ground instead of leaving it, m "
+                 "(ground snapping; 0: off)")
       ->capture_default_str();
   app.add_option("--threads", options.threads,
                  "Threads stepping the crowd (a thread pool; same trajectories for any number)")
@@ -272,10 +276,11 @@ int main(int argc, char** argv) {
         << ", \"agents\": " << options.agents << ", \"frames\": " << options.frames
         << ", \"speed\": " << options.speed << ", \"dt\": " << options.dt << ", \"method\": \""
         << (options.method == bspf::CollisionMethod::Planes ? "planes" : "exact") << "\""
-        << ", \"step_height\": " << options.stepHeight << ", \"radius_xz\": " << options.radii.xz
-        << ", \"radius_y\": " << options.radii.y << ", \"seed\": " << options.seed
-        << ", \"threads\": " << options.threads << ", \"steps\": " << s.steps
-        << ", \"ns_per_step\": " << s.nsPerStep << ", \"refused_moves\": " << s.refusedMoves
+        << ", \"step_height\": " << options.stepHeight << ", \"step_down\": " << options.stepDown
+        << ", \"radius_xz\": " << options.radii.xz << ", \"radius_y\": " << options.radii.y
+        << ", \"seed\": " << options.seed << ", \"threads\": " << options.threads
+        << ", \"steps\": " << s.steps << ", \"ns_per_step\": " << s.nsPerStep
+        << ", \"refused_moves\": " << s.refusedMoves
         << ", \"iterations_mean\": " << s.iterationsMean
         << ", \"iterations_max\": " << s.iterationsMax
         << ", \"grounded_fraction\": " << s.groundedFraction

@@ -50,6 +50,8 @@ struct Options {
   CollisionMethod method = CollisionMethod::Planes;
   /// MovementSettings::maxStepHeight, metres: 0 (off) by default.
   float stepHeight = 0.0f;
+  /// MovementSettings::maxStepDown, metres (ground snapping): its default.
+  float stepDown = MovementSettings{}.maxStepDown;
   std::uint64_t seed = 1;
   /// Threads stepping the crowd (a bspf::ThreadPool); the trajectories are
   /// the same for any number.
@@ -79,6 +81,8 @@ inline std::string validate(const Options& o) {
     return "--threads must be 1 to 256 (got " + std::to_string(o.threads) + ")";
   if (!std::isfinite(o.stepHeight) || o.stepHeight < 0 || o.stepHeight > 2 * o.radii.y)
     return "--step-height must be 0 to twice --radius-y (got " + text(o.stepHeight) + ")";
+  if (!std::isfinite(o.stepDown) || o.stepDown < 0 || o.stepDown > kMaxBodyRadius)
+    return "--step-down must be 0 to " + text(kMaxBodyRadius) + " m (got " + text(o.stepDown) + ")";
   return {};
 }
 
@@ -400,6 +404,7 @@ class Simulation {
       body.radii = options.radii;
       body.settings.method = options.method;
       body.settings.maxStepHeight = options.stepHeight;
+      body.settings.maxStepDown = options.stepDown;
       body.settings.maxHorizontalSpeed = options.speed;
       agents_[i] = RandomWalk(streamSeed(options.seed, i + 1));
     }

@@ -59,6 +59,75 @@ float horizontalProgress(const Vec3& start, const Vec3& end, const Vec3& move) {
   return length > 0 ? (end - start).dot(along) / length : 0;
 }
 
+bool anyWalkable(const SlideResult& r) {
+  return std::any_of(r.contacts.begin(), r.contacts.begin() + r.contactCount,
+                     [](const Contact& c) { return c.walkable; });
+}
+
+// Whether anything below held the body in this slide: a contact facing up,
+// walkable or not (a wall's normal may tilt by float rounding: within about
+// half a degree of level it is a wall). A steep contact facing up is one the
+// move pushed into (a slope too steep to walk, or the rounded edge of a step
+// the exact sweep is riding over): the body is not leaving the ground there,
+// and pulling it down would drag it back off the edge.
+bool heldFromBelow(const SlideResult& r) {
+  return std::any_of(r.contacts.begin(), r.contacts.begin() + r.contactCount,
+                     [](const Contact& c) { return c.walkable || c.normal.y() > 0.01f; });
+}
+
+// Ground snapping (MovementSettings::maxStepDown): a body that was grounded
+// and whose move (`slide`, of `move`, from a velocity not moving it upward)
+// left the ground is slid straight down from the move's end, with the
+// narrow phase, so it never passes through anything; the slide down is kept
+// when it ends on walkable ground at most maxStepDown below the move's end.
+// Both narrow phases stop a body on walkable ground where they meet it (no
+// creep downhill), so on a slope the snapped body keeps the move's
+// horizontal progress.
+// The first slide goes only as deep as the steepest walkable slope falls
+// over the move (plus a frame of gravity): the common case, walking down a
+// slope, then stays in the box of triangles the move itself queried; only
+// when nothing is met does the next go on to maxStepDown (stairs, ledges).
+// A rounded body (the exact sweep) going over a stair's edge meets the edge
+// steep: the slide down slips along it and spends most of its length doing
+// so, so the next goes on straight down from where it slipped to, with what
+// is left of the drop. At most kSnapSlides slides in all.
+void snapToGround(const World& world, const Body& body, const Vec3& move, float walkableY,
+                  StepScratch& scratch, SlideResult& slide) {
+  constexpr int kSnapSlides = 4;
+  const MovementSettings& s = body.settings;
+  const float lowest = slide.end.y() - s.maxStepDown;
+  const float slopeTan = std::sqrt(std::max(0.0f, 1 - walkableY * walkableY)) / walkableY;
+  const float slopeDrop = std::hypot(move.x(), move.z()) * slopeTan + std::max(0.0f, -move.y());
+  SlideResult down;
+  down.end = slide.end;
+  int iterations = 0;
+  for (int k = 0; k < kSnapSlides; ++k) {
+    const float rest = down.end.y() - lowest;
+    const bool all = k > 0 || slopeDrop + s.skin >= rest;
+    if (rest <= s.skin) return;
+    down = slideAgainstLevel(world, down.end, down.end - Vec3(0, all ? rest : slopeDrop, 0),
+                             body.radii, s, walkableY, scratch);
+    iterations += down.iterations;
+    if (down.refused) return;
+    if (anyWalkable(down)) break;
+    // Nothing below within maxStepDown (a ledge higher than it, a gap): the
+    // body falls.
+    if (all && down.contactCount == 0) return;
+  }
+  if (!anyWalkable(down) || down.end.y() < lowest - s.skin) return;
+  slide.end = down.end;
+  slide.iterations += iterations;
+  for (int i = 0; i < down.contactCount; ++i) {
+    if (slide.contactCount < kMaxReportedContacts) {
+      slide.contacts[slide.contactCount++] = down.contacts[i];
+    } else if (down.contacts[i].walkable) {
+      // A full list keeps the ground, which decides the ground state.
+      slide.contacts[kMaxReportedContacts - 1] = down.contacts[i];
+      break;
+    }
+  }
+}
+
 // Stairs: a grounded body whose horizontal move was blocked retries it lifted
 // by maxStepHeight (up, across, then down onto the step), and keeps the retry
 // when it lands on walkable ground further along than the plain slide. The
@@ -83,18 +152,14 @@ void tryStepUp(const World& world, const Body& body, const Vec3& start, const Ve
   const float drop = (up.end.y() - start.y()) + std::max(0.0f, -move.y());
   const SlideResult down = slideAgainstLevel(world, over.end, over.end - Vec3(0, drop, 0),
                                              body.radii, s, walkableY, scratch);
-  auto walkable = [](const SlideResult& r) {
-    return std::any_of(r.contacts.begin(), r.contacts.begin() + r.contactCount,
-                       [](const Contact& c) { return c.walkable; });
-  };
   // A rounded body (the exact sweep) comes down on the step's edge before
   // its centre is over the step: an edge contact facing up, higher than the
   // start, is standing on a step. (A steep slope's face still refuses.)
   const bool onStepEdge =
-      !walkable(down) && down.end.y() > start.y() + 1e-3f &&
+      !anyWalkable(down) && down.end.y() > start.y() + 1e-3f &&
       std::any_of(down.contacts.begin(), down.contacts.begin() + down.contactCount,
                   [](const Contact& c) { return c.edge && c.normal.y() > 0; });
-  if (!walkable(down) && !onStepEdge) return;
+  if (!anyWalkable(down) && !onStepEdge) return;
   // Never higher than the step height: a walkable response on the way down
   // (the planes method lifts a body onto a surface it reaches) could
   // otherwise carry it onto a ledge above the lift.
@@ -126,7 +191,8 @@ bool settingsInRange(const Body& body) {
          s.maxHorizontalSpeed > 0 && s.walkableSlopeDegrees >= 0 && s.walkableSlopeDegrees <= 89 &&
          s.maxIterations >= 1 && s.maxIterations <= 32 && s.restitution >= 0 &&
          s.restitution <= 1 && s.skin > 0 && s.skin < std::min(body.radii.xz, body.radii.y) &&
-         s.maxStepHeight >= 0 && s.maxStepHeight <= 2 * body.radii.y;
+         s.maxStepHeight >= 0 && s.maxStepHeight <= 2 * body.radii.y && s.maxStepDown >= 0 &&
+         s.maxStepDown <= kMaxBodyRadius;
 }
 
 }  // namespace
@@ -200,10 +266,16 @@ InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt
   };
   if (body.settings.maxStepHeight > 0 && (body.grounded || onEdge()))
     tryStepUp(world, body, start, start + body.velocity * dt, walkableY, scratch, slide);
+  // Ground snapping, when the move left the ground: nothing below held it.
+  // Moving upward means a vertical velocity above 0 after this step's
+  // gravity: a jump or a bounce (walking never leaves one; see
+  // MovementSettings::maxStepDown). A refused move stays where it was.
+  if (body.settings.maxStepDown > 0 && body.grounded && body.velocity.y() <= 0 && !slide.refused &&
+      !heldFromBelow(slide))
+    snapToGround(world, body, body.velocity * dt, walkableY, scratch, slide);
   body.position = slide.end;
   detail::respondToContacts(body, slide, dt);
-  body.grounded = std::any_of(slide.contacts.begin(), slide.contacts.begin() + slide.contactCount,
-                              [](const Contact& c) { return c.walkable; });
+  body.grounded = anyWalkable(slide);
   if (report) {
     recordSlide(report, slide, true);
     report->grounded = body.grounded;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include <bspf/movement.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
@@ -464,6 +465,213 @@ TEST_CASE("friction stops a sliding body without reversing it", "[runtime][movem
   const Vec3 stopped = body.position;
   run(level.world, body, Vec3::Zero(), 60, scratch);
   REQUIRE((body.position - stopped).norm() < 1e-6f);
+}
+
+namespace {
+
+// Ground snapping (MovementSettings::maxStepDown): what a body walking down
+// a slope or stairs does, frame by frame.
+struct Descent {
+  int frames = 0;
+  int grounded = 0;         // frames ending grounded
+  int longestAirborne = 0;  // most frames in a row not grounded
+  float highestFloat = 0;   // metres above its resting height over the slope (slopes only)
+  float slowest = 1e9f;     // horizontal speed of the position, m/s
+  float fastest = 0;
+};
+
+// Steps `body` for `frames` frames pushed along `force`, recording its
+// descent; `restingY(position)` is where it would rest at that place (NaN
+// when not measured).
+template <typename RestingY>
+Descent descend(const bspf::World& world, Body& body, const Vec3& force, int frames,
+                bspf::StepScratch& scratch, RestingY restingY) {
+  Descent d;
+  int airborne = 0;
+  for (int f = 0; f < frames; ++f) {
+    const Vec3 before = body.position;
+    bspf::stepBody(world, body, force, kDt, scratch);
+    ++d.frames;
+    d.grounded += body.grounded;
+    airborne = body.grounded ? 0 : airborne + 1;
+    d.longestAirborne = std::max(d.longestAirborne, airborne);
+    const float rest = restingY(body.position);
+    if (!std::isnan(rest)) d.highestFloat = std::max(d.highestFloat, body.position.y() - rest);
+    const Vec3 step = body.position - before;
+    const float speed = std::hypot(step.x(), step.z()) / kDt;
+    d.slowest = std::min(d.slowest, speed);
+    d.fastest = std::max(d.fastest, speed);
+  }
+  return d;
+}
+
+const float kTan30 = std::tan(30 * std::numbers::pi_v<float> / 180);
+
+// A body standing on the 30 degree slope(30) at z = 14, settled; returns
+// its resting height above the slope's surface.
+float settleOnSlope(const bspf::World& world, Body& body, bspf::StepScratch& scratch) {
+  body.position = Vec3(0, 14 * kTan30 + 1.5f, 14);
+  run(world, body, Vec3::Zero(), 60, scratch);
+  return body.position.y() - body.position.z() * kTan30;
+}
+
+// Walks a body down the 30 degree slope at 6 m/s for one second.
+Descent walkDownSlope(bspf::CollisionMethod method, float maxStepDown) {
+  const Level level(slope(30));
+  bspf::StepScratch scratch;
+  Body body = walker({}, method);
+  body.settings.maxStepDown = maxStepDown;
+  const float offset = settleOnSlope(level.world, body, scratch);
+  body.velocity = Vec3(0, 0, -6);
+  return descend(level.world, body, Vec3(0, 0, -60), 60, scratch,
+                 [&](const Vec3& p) { return p.z() * kTan30 + offset; });
+}
+
+// Stairs rising along +x from x = 0: `steps` risers of `riser` metres,
+// 0.3 m treads, on the floor slab; the top tread runs on to x = 15.
+bspc::Mesh stairs(int steps, double riser) {
+  bspc::Mesh mesh = floorSlab();
+  for (int k = 0; k < steps; ++k)
+    bspf::test::append(mesh, bspf::test::boxMesh({0.3 * k, 0, -2}, {15, riser * (k + 1), 2}));
+  return mesh;
+}
+
+// Walks a body from the top of 8 stairs of 0.2 m risers down to the floor at
+// 4 m/s; the descent is measured until it reaches the floor (x < -0.5).
+Descent walkDownStairs(bspf::CollisionMethod method, float maxStepDown, Body* end = nullptr) {
+  const Level level(stairs(8, 0.2));
+  bspf::StepScratch scratch;
+  Body body = walker({5, 1.6f + 0.86f, 0}, method);
+  body.settings.maxStepDown = maxStepDown;
+  body.settings.maxHorizontalSpeed = 4;
+  run(level.world, body, Vec3::Zero(), 30, scratch);
+  body.velocity = Vec3(-4, 0, 0);
+  Descent d;
+  int airborne = 0;
+  while (d.frames < 120 && body.position.x() > -0.5f) {
+    bspf::stepBody(level.world, body, Vec3(-60, 0, 0), kDt, scratch);
+    ++d.frames;
+    d.grounded += body.grounded;
+    airborne = body.grounded ? 0 : airborne + 1;
+    d.longestAirborne = std::max(d.longestAirborne, airborne);
+  }
+  if (end) *end = body;
+  return d;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "ground snapping: a body walking down a 30 degree slope at 6 m/s is grounded every frame, "
+    "keeps its horizontal speed and never floats",
+    "[runtime][movement][snap]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  const Descent d = walkDownSlope(method, bspf::MovementSettings{}.maxStepDown);
+  CHECK(d.grounded == d.frames);
+  CHECK(d.slowest > 6 * 0.999f);
+  CHECK(d.fastest < 6 * 1.001f);
+  CHECK(d.highestFloat < 2e-3f);
+}
+
+TEST_CASE(
+    "ground snapping: a body walking down 0.2 m stairs at 4 m/s is grounded every frame and "
+    "ends on the floor",
+    "[runtime][movement][snap]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  Body end;
+  const Descent d = walkDownStairs(method, bspf::MovementSettings{}.maxStepDown, &end);
+  INFO("grounded " << d.grounded << " of " << d.frames << " frames, end "
+                   << end.position.transpose());
+  CHECK(d.grounded == d.frames);
+  CHECK(end.position.x() < -0.5f);
+  CHECK(end.position.y() == Approx(0.85f).margin(3e-3));
+}
+
+TEST_CASE("ground snapping never holds down a jumping body, on a floor or walking down a slope",
+          "[runtime][movement][snap]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  bspf::StepScratch scratch;
+  auto jump = [&](const bspf::World& world, Body& body, const Vec3& force) {
+    REQUIRE(body.grounded);
+    const float start = body.position.y();
+    body.velocity.y() = 5;  // about 1.3 m high
+    float highest = start;
+    for (int f = 0; f < 20; ++f) {
+      bspf::stepBody(world, body, force, kDt, scratch);
+      INFO("frame " << f);
+      CHECK_FALSE(body.grounded);
+      highest = std::max(highest, body.position.y());
+    }
+    CHECK(highest > start + 1.0f);
+  };
+  {
+    const Level level(floorSlab());
+    Body body = walker({0, 0.851f, 0}, method);
+    run(level.world, body, Vec3::Zero(), 10, scratch);
+    jump(level.world, body, Vec3::Zero());
+  }
+  {
+    const Level level(slope(30));
+    Body body = walker({}, method);
+    settleOnSlope(level.world, body, scratch);
+    body.velocity = Vec3(0, 0, -6);
+    run(level.world, body, Vec3(0, 0, -60), 10, scratch);
+    jump(level.world, body, Vec3(0, 0, -60));
+  }
+}
+
+TEST_CASE(
+    "ground snapping sets a body walking off a ledge down onto the floor when the ledge is "
+    "within maxStepDown, and lets it fall from a higher one",
+    "[runtime][movement][snap]") {
+  const bspf::CollisionMethod method = eachMethod();
+  const float stepDown = bspf::MovementSettings{}.maxStepDown;
+  for (const float height : {stepDown - 0.05f, stepDown + 0.1f}) {
+    INFO("method " << nameOf(method) << ", ledge " << height << " m");
+    bspc::Mesh mesh = floorSlab();
+    bspf::test::append(mesh, bspf::test::boxMesh({0, 0, -5}, {10, height, 5}));
+    const Level level(mesh);
+    bspf::StepScratch scratch;
+    Body body = walker({3, height + 0.86f, 0}, method);
+    run(level.world, body, Vec3::Zero(), 30, scratch);
+    body.velocity = Vec3(-6, 0, 0);
+    const Descent d = descend(level.world, body, Vec3(-60, 0, 0), 60, scratch,
+                              [](const Vec3&) { return std::nanf(""); });
+    // Either way it ends on the floor below, 3 m past the ledge.
+    CHECK(body.position.x() < -2);
+    CHECK(body.position.y() == Approx(0.85f).margin(3e-3));
+    if (height <= stepDown) {
+      CHECK(d.grounded == d.frames);
+    } else {
+      // 0.45 m falls in 0.3 s: about 18 frames.
+      CHECK(d.longestAirborne >= 12);
+    }
+  }
+}
+
+TEST_CASE("ground snapping lets a body walking over a gap wider than itself fall into it",
+          "[runtime][movement][snap]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  // A 2.5 m wide, 3 m deep trench across the floor, from x = 0; the body is
+  // 0.9 m wide.
+  bspc::Mesh mesh = bspf::test::boxMesh({-20, -4, -20}, {0, 0, 20});
+  bspf::test::append(mesh, bspf::test::boxMesh({2.5, -4, -20}, {20, 0, 20}));
+  bspf::test::append(mesh, bspf::test::boxMesh({0, -4, -20}, {2.5, -3, 20}));
+  const Level level(mesh);
+  bspf::StepScratch scratch;
+  Body body = walker({-2, 0.851f, 0}, method);
+  body.settings.maxHorizontalSpeed = 3;
+  run(level.world, body, Vec3::Zero(), 10, scratch);
+  REQUIRE(body.grounded);
+  body.velocity = Vec3(3, 0, 0);
+  run(level.world, body, Vec3(60, 0, 0), 120, scratch);
+  // In the trench, standing on its bottom against its far wall.
+  CHECK(body.position.y() == Approx(-3 + 0.85f).margin(3e-3));
+  CHECK(body.position.x() == Approx(2.5f - 0.45f).margin(3e-3));
 }
 
 TEST_CASE("the same inputs give the same trajectory, and a step leaves the world unchanged",

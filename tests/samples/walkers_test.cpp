@@ -249,6 +249,12 @@ TEST_CASE("walkers: spawn files, options, placement and determinism", "[samples]
     REQUIRE_THAT(bspf::walkers::validate(o), Catch::Contains("--step-height"));
     o.stepHeight = 0.35f;
     REQUIRE(bspf::walkers::validate(o).empty());
+    o.stepDown = -0.1f;
+    REQUIRE_THAT(bspf::walkers::validate(o), Catch::Contains("--step-down"));
+    o.stepDown = std::nanf("");
+    REQUIRE_THAT(bspf::walkers::validate(o), Catch::Contains("--step-down"));
+    o.stepDown = 0;
+    REQUIRE(bspf::walkers::validate(o).empty());
     o.threads = 0;
     REQUIRE_THAT(bspf::walkers::validate(o), Catch::Contains("--threads"));
   }
@@ -493,12 +499,12 @@ TEST_CASE(
   const std::filesystem::path dir = bspf::test::freshTempDir("walkers-keys");
   const std::filesystem::path samples = bspf::test::samplesDir();
   bspc::compileFile(samples / "box_room.obj", dir / "box_room.bspf", {});
-  const auto r = runWalkers(quoted(dir / "box_room.bspf") + " --spawns " +
-                            quoted(samples / "box_room.spawns.txt") +
-                            " --agents 5 --frames 7 --speed 3.5 --seed 9 --dt 0.025"
-                            " --radius-xz 0.3 --radius-y 0.6 --method exact --step-height 0.2"
-                            " --trace " +
-                            quoted(dir / "trace.csv") + " --json");
+  const auto r = runWalkers(
+      quoted(dir / "box_room.bspf") + " --spawns " + quoted(samples / "box_room.spawns.txt") +
+      " --agents 5 --frames 7 --speed 3.5 --seed 9 --dt 0.025"
+      " --radius-xz 0.3 --radius-y 0.6 --method exact --step-height 0.2 --step-down 0.1"
+      " --trace " +
+      quoted(dir / "trace.csv") + " --json");
   INFO(r.err << r.out);
   REQUIRE(r.status == 0);
   REQUIRE(jsonValue(r.out, "agents") == "5");
@@ -510,7 +516,7 @@ TEST_CASE(
   REQUIRE_THAT(jsonValue(r.out, "level"), Catch::Contains("box_room.bspf"));
   for (const auto& [key, value] :
        {std::pair{"speed", 3.5}, std::pair{"dt", 0.025}, std::pair{"step_height", 0.2},
-        std::pair{"radius_xz", 0.3}, std::pair{"radius_y", 0.6}}) {
+        std::pair{"step_down", 0.1}, std::pair{"radius_xz", 0.3}, std::pair{"radius_y", 0.6}}) {
     INFO(key);
     REQUIRE(std::stod(jsonValue(r.out, key)) == Approx(value));
   }

@@ -20,7 +20,10 @@
 //      test starts again, up to MovementSettings::maxIterations slides; a
 //      move still blocked after that is refused (the body stays put); a
 //      grounded body stopped by something steep may step up onto it
-//      (MovementSettings::maxStepHeight, off by default);
+//      (MovementSettings::maxStepHeight, off by default); a body that was
+//      grounded and whose move left walkable ground is set back down onto
+//      walkable ground within MovementSettings::maxStepDown below (ground
+//      snapping: slopes and stairs going down), unless it moves upward;
 //   3. contacts update the velocity (slide or bounce) and the ground state.
 // stepBodies then pushes overlapping bodies apart, horizontally (hashed grid
 // broad phase, every push computed from the positions after the level phase,
@@ -101,6 +104,28 @@ struct MovementSettings {
   /// 0.35 suits a 1.7 m character on game stairs (docs/stability.md). Costs
   /// three more slides, only in steps blocked while grounded.
   float maxStepHeight = 0.0f;
+  /// Ground snapping: the deepest drop, metres, a grounded body is set down
+  /// onto walkable ground instead of leaving it. When a body that was
+  /// grounded after its last step (Body::grounded) makes a move that nothing
+  /// below holds (no walkable contact, and no steep contact facing up, such
+  /// as a step edge it is climbing), the step slides it straight down by up
+  /// to this much with its narrow phase (so it never passes through
+  /// anything) and keeps that slide if it ends on walkable ground: walking
+  /// down a walkable slope it keeps its horizontal speed and stays grounded
+  /// every frame, and down stairs of risers up to this height it is
+  /// grounded every frame. Never when the body moves upward (its vertical
+  /// velocity, after this step's gravity, is above 0: walking never gives
+  /// that, since a walkable contact zeroes the vertical velocity and a slope
+  /// lifts the body through the slide, so it is a jump or a bounce), when
+  /// nothing walkable lies within this drop (a ledge higher than it, a gap
+  /// wider than the body: the body falls), when the slide down ends on
+  /// steep ground only, or when the move was refused. 0 to kMaxBodyRadius;
+  /// 0 turns it off. Default 0.35: stairs of game levels and, at 60 frames a
+  /// second, a 45-degree slope walked down at up to 21 m/s, for a 1.7 m
+  /// character (radii 0.45 and 0.85). Costs one slide down (rarely up to
+  /// four: docs/algorithm.md), only in steps of grounded bodies that left
+  /// the ground.
+  float maxStepDown = 0.35f;
 };
 
 /// The smallest and the largest body radius, metres, the step accepts. Below
