@@ -49,6 +49,13 @@ TEST_CASE("closed pieces wound inward are counted, those facing out and open sur
     mesh.triangles.resize(10);
     CHECK(bspc::countClosedPieces(mesh).closedPieces == 0);
   }
+  SECTION("two boxes sharing only an edge: that edge joins four faces, so neither is counted") {
+    bspc::Mesh mesh = box(0, 2);
+    bspf::test::append(mesh, bspf::test::boxMesh({2, 2, 0}, {4, 4, 2}));
+    bspc::CleanReport cleaned;
+    mesh = bspc::cleanMesh(mesh, {}, cleaned);
+    CHECK(bspc::countClosedPieces(mesh).closedPieces == 0);
+  }
   SECTION("a box with one face flipped is not consistently wound: not counted") {
     bspc::Mesh mesh = box(0, 2);
     std::swap(mesh.triangles[0][1], mesh.triangles[0][2]);
