@@ -30,11 +30,10 @@ using Vec3d = Eigen::Vector3d;
 // further than that from every reached centre are never touched. The small
 // margin covers rounding and a body resting a skin's width inside contact.
 constexpr double kMarginBodySpace = 0.02;
-// The cell, as a fraction of the smaller radius, and the largest it may grow
-// to fit maxCells: a wall crossed by the path between two neighbouring cell
+// The largest cell, as a fraction of the smaller radius, it may grow to, to
+// fit maxCells: a wall crossed by the path between two neighbouring cell
 // centres is within half a cell of one of them, which must then be blocked
 // ((h / 2) / r < 1 - halfDiagonal - margin); 0.6 keeps clear of that bound.
-constexpr double kCellOfRadius = 0.2;
 constexpr double kLargestCellOfRadius = 0.6;
 
 struct Grid {
@@ -109,9 +108,9 @@ void forCellsNear(const Grid& grid, const Vec3d& toBody, const BodyTriangle& tri
         const std::uint64_t cell = grid.index(at[0], at[1], at[2]);
         if (!consider(cell)) continue;
         const Vec3d p = grid.centre(at[0], at[1], at[2]).cwiseProduct(toBody);
-        const double distance =
-            (p - bspf::closestPointOnTriangle<Vec3d>(p, tri.a, tri.b, tri.c)).norm();
-        if (distance <= reach && !visit(cell)) return;
+        const double squared =
+            (p - bspf::closestPointOnTriangle<Vec3d>(p, tri.a, tri.b, tri.c)).squaredNorm();
+        if (squared <= reach * reach && !visit(cell)) return;
       }
     }
   }
@@ -167,7 +166,7 @@ Mesh dropUnreachableFaces(const Mesh& mesh, const ReachSettings& settings, Reach
   // so a flood that leaks out of an open level goes round it.
   Grid grid;
   const double smaller = radii.minCoeff();
-  for (grid.cell = kCellOfRadius * smaller;; grid.cell *= 1.25) {
+  for (grid.cell = settings.cellOfRadius * smaller;; grid.cell *= 1.25) {
     grid.origin = low - radii - Vec3d::Constant(2 * grid.cell);
     const Vec3d span = high + radii + Vec3d::Constant(2 * grid.cell) - grid.origin;
     for (int axis = 0; axis < 3; ++axis)

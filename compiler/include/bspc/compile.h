@@ -34,7 +34,8 @@ struct CompileReport {
   std::vector<std::string> warnings;
 };
 
-/// import, clean, build tree, precompute planes, write: `input` (any format
+/// import, clean, drop faces no body can reach (settings.reach, when it
+/// names points), build tree, precompute planes, write: `input` (any format
 /// assimp reads, a regular file) to the blob at `output`, and, when
 /// `statsJson` is not empty, the report as JSON (toJson) to that file. Both
 /// outputs are written through PendingFile (write.h): their temporaries are

@@ -131,11 +131,17 @@ struct ReachSettings {
   /// connected to `from`. Each > 0.01 and finite; their ratio at most 8.
   double radiusXZ = 0.45;
   double radiusY = 0.85;
-  /// Most grid cells the flood may use (1 bit each, twice). The cell is a
-  /// fifth of the smaller radius; a level that needs more cells (about
-  /// 1 km x 100 m x 1 km for the default body) is left whole, with a
-  /// warning. 1 to 2^34.
-  std::uint64_t maxCells = std::uint64_t(1) << 31;
+  /// Most grid cells the flood may use (1 bit each, twice: 64 MiB at the
+  /// default). A level that needs more at cellOfRadius gets larger cells (up
+  /// to 0.6 of the smaller radius: fewer faces dropped); one that needs more
+  /// even then (about 230 x 100 x 230 m for the default body) is left whole,
+  /// with a warning. 1 to 2^34.
+  std::uint64_t maxCells = std::uint64_t(1) << 28;
+  /// The grid's cell, as a fraction of the smaller radius: 0.05 to 0.4.
+  /// Smaller cells drop more faces (the flood and the keep test are within
+  /// a cell of exact) and take longer: the cells near surfaces grow as its
+  /// inverse square.
+  double cellOfRadius = 0.2;
 };
 
 struct CompileSettings {
