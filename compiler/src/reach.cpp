@@ -206,7 +206,9 @@ Mesh dropUnreachableFaces(const Mesh& mesh, const ReachSettings& settings, Reach
         });
 
   // The flood, depth first over the six neighbours of each cell.
-  std::vector<std::uint64_t> stack;
+  // Cell numbers fit 32 bits (maxCells <= 2^32): half the memory of a
+  // flood that can hold most of the grid.
+  std::vector<std::uint32_t> stack;
   for (std::size_t n = 0; n < settings.from.size(); ++n) {
     const Vec3d at = (settings.from[n] - grid.origin) / grid.cell;
     const std::uint64_t cell =
@@ -216,7 +218,7 @@ Mesh dropUnreachableFaces(const Mesh& mesh, const ReachSettings& settings, Reach
                          pointText(settings.from[n]) +
                          ") is within a body's size of a surface: give body centres, clear of "
                          "every surface by the body's radii");
-    if (!reached.get(cell)) reached.set(cell), stack.push_back(cell);
+    if (!reached.get(cell)) reached.set(cell), stack.push_back(std::uint32_t(cell));
   }
   const std::uint64_t sx = std::uint64_t(grid.size[0]), sy = std::uint64_t(grid.size[1]);
   while (!stack.empty()) {
@@ -230,7 +232,7 @@ Mesh dropUnreachableFaces(const Mesh& mesh, const ReachSettings& settings, Reach
     }
     const auto go = [&](bool inside, std::uint64_t next) {
       if (inside && !blocked.get(next) && !reached.get(next))
-        reached.set(next), stack.push_back(next);
+        reached.set(next), stack.push_back(std::uint32_t(next));
     };
     go(i > 0, cell - 1);
     go(i + 1 < sx, cell + 1);

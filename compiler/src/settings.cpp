@@ -62,8 +62,8 @@ void validate(const CompileSettings& s) {
   require(std::isfinite(rxz) && std::isfinite(ry) && rxz > 0.01 && ry > 0.01 && rxz <= 8 * ry &&
               ry <= 8 * rxz,
           "body radii must be finite, > 0.01 m, and within a factor 8 of each other");
-  require(s.reach.maxCells >= 1 && s.reach.maxCells <= (std::uint64_t(1) << 34),
-          "reach grid cells must be 1 to 2^34");
+  require(s.reach.maxCells >= 1 && s.reach.maxCells <= (std::uint64_t(1) << 32),
+          "reach grid cells must be 1 to 2^32");
   require(s.reach.cellOfRadius >= 0.05 && s.reach.cellOfRadius <= 0.4,
           "reach cell must be 0.05 to 0.4 of the smaller radius");
   for (const Eigen::Vector3d& p : s.reach.from)

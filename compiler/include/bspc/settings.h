@@ -135,7 +135,7 @@ struct ReachSettings {
   /// default). A level that needs more at cellOfRadius gets larger cells (up
   /// to 0.6 of the smaller radius: fewer faces dropped); one that needs more
   /// even then (about 230 x 100 x 230 m for the default body) is left whole,
-  /// with a warning. 1 to 2^34.
+  /// with a warning. 1 to 2^32.
   std::uint64_t maxCells = std::uint64_t(1) << 28;
   /// The grid's cell, as a fraction of the smaller radius: 0.05 to 0.4.
   /// Smaller cells drop more faces (the flood and the keep test are within
