@@ -44,7 +44,8 @@ std::string namingOption(const std::string& message, const bspc::CompileSettings
       {"split weight", "--split-weight", s.tree.splitWeight},
       {"query reach", "--query-reach", s.tree.queryReach},
       {"axis candidates", "--axis-candidates", s.tree.axisCandidatesPerAxis},
-      {"triangle candidates", "--triangle-candidates", s.tree.triangleCandidates}};
+      {"triangle candidates", "--triangle-candidates", s.tree.triangleCandidates},
+      {"body radii", "--body-radii", s.reach.radiusXZ}};
   const std::string prefix = "invalid setting: ";
   if (message.rfind(prefix, 0) != 0) return message;
   const std::string rest = message.substr(prefix.size());
@@ -141,6 +142,17 @@ int main(int argc, char** argv) {
       ->type_name("MIB")
       ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1} << 40))
       ->capture_default_str();
+  std::string reachFrom;
+  std::vector<double> bodyRadii;
+  app.add_option("--reach-from", reachFrom,
+                 "Drop every face no body can touch from these points (body centres, metres, "
+                 "one \"x y z\" a line): see README, \"Faces no body can touch\"")
+      ->type_name("FILE");
+  app.add_option("--body-radii", bodyRadii,
+                 "The body --reach-from keeps faces for: horizontal and vertical radius, metres")
+      ->expected(2)
+      ->type_name("XZ Y")
+      ->default_str("0.45 0.85");
   app.add_option("--stats-json", statsJson, "Also write the compile report as JSON to this file")
       ->type_name("FILE");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors and warnings");
@@ -184,6 +196,14 @@ command line (the error names the option).)");
   settings.import.up = axes.at(upLower);
   settings.tree.candidates = candidateKinds.at(candidatesLower);
   settings.import.memoryLimitBytes = importMemoryMiB << 20;
+  if (!bodyRadii.empty()) {
+    if (reachFrom.empty()) {
+      std::cerr << "bspc: error: --body-radii needs --reach-from (see bspc --help)\n";
+      return 2;
+    }
+    settings.reach.radiusXZ = bodyRadii[0];
+    settings.reach.radiusY = bodyRadii[1];
+  }
   if (!infoPath.empty()) return runInfo(infoPath);
   if (input.empty() || output.empty()) {
     std::cerr << "bspc: error: need an input mesh and -o OUTPUT.bspf (see bspc --help)\n";
@@ -201,6 +221,15 @@ command line (the error names the option).)");
     settings.progress = [](std::string_view line) {
       std::cerr << "\r\033[K" << line << std::flush;
     };
+
+  if (!reachFrom.empty()) {
+    try {
+      settings.reach.from = bspc::readReachPoints(reachFrom);
+    } catch (const bspc::CompileError& e) {
+      std::cerr << "bspc: error: " << e.what() << "\n";
+      return 1;
+    }
+  }
 
   // Ctrl-C or a kill during the compile removes the temporary files.
   bspc::removeTemporariesOnSignal();

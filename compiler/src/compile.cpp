@@ -4,6 +4,7 @@
 #include <bspc/import.h>
 #include <bspc/mesh_checks.h>
 #include <bspc/planes.h>
+#include <bspc/reach.h>
 #include <bspc/write.h>
 
 #include <chrono>
@@ -62,26 +63,36 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
                  limits);
   report.warnings = mesh.warnings;
   for (std::string& warning : meshWarnings(clean)) report.warnings.push_back(std::move(warning));
+  say(settings, "drop faces no body can reach");
+  // A copy only when the reach rule is on: the mesh can be most of the
+  // compile's memory.
+  Mesh dropped;
+  if (!settings.reach.from.empty())
+    dropped = timed(report.seconds.reach, [&] {
+      return dropUnreachableFaces(clean, settings.reach, report.reach, report.warnings);
+    });
+  const Mesh& reached = settings.reach.from.empty() ? clean : dropped;
   say(settings, "build tree");
   const BspTree tree = timed(report.seconds.buildTree,
-                             [&] { return buildTree(clean, settings.tree, settings.progress); });
-  checkBlobBytes(estimateBlobBytes(clean.vertices.size(), clean.triangles.size(), tree.nodes.size(),
-                                   tree.leaves.size(), tree.leafTriangles.size()),
-                 true, clean, limits);
+                             [&] { return buildTree(reached, settings.tree, settings.progress); });
+  checkBlobBytes(
+      estimateBlobBytes(reached.vertices.size(), reached.triangles.size(), tree.nodes.size(),
+                        tree.leaves.size(), tree.leafTriangles.size()),
+      true, reached, limits);
   say(settings, "precompute planes");
-  const auto planes = timed(report.seconds.planes, [&] { return computeTrianglePlanes(clean); });
+  const auto planes = timed(report.seconds.planes, [&] { return computeTrianglePlanes(reached); });
   say(settings, "serialise");
   std::vector<std::uint8_t> blob = timed(report.seconds.write, [&] {
-    return serializeWorld(clean, planes, tree, {sourceName, settings, report.clean});
+    return serializeWorld(reached, planes, tree, {sourceName, settings, report.clean});
   });
 
-  checkBlobBytes(blob.size(), false, clean, limits);
+  checkBlobBytes(blob.size(), false, reached, limits);
   // bspc never writes a blob its own runtime would refuse.
   const bspf::OpenResult opened = bspf::viewWorld(std::as_bytes(std::span(blob)));
   if (!opened)
     throw CompileError("internal error: the compiled blob fails verification: " + opened.message);
   report.tree = bspf::computeTreeStats(*opened.world);
-  report.triangles = static_cast<std::uint32_t>(clean.triangles.size());
+  report.triangles = static_cast<std::uint32_t>(reached.triangles.size());
   report.outputBytes = blob.size();
   return blob;
 }
@@ -160,7 +171,7 @@ std::string toJson(const CompileReport& r) {
   out.precision(6);
   out << "{\"seconds\":{\"import\":" << r.seconds.import << ",\"clean\":" << r.seconds.clean
       << ",\"build_tree\":" << r.seconds.buildTree << ",\"planes\":" << r.seconds.planes
-      << ",\"write\":" << r.seconds.write << "},"
+      << ",\"reach\":" << r.seconds.reach << ",\"write\":" << r.seconds.write << "},"
       << "\"clean\":{\"input_vertices\":" << r.clean.inputVertices
       << ",\"input_triangles\":" << r.clean.inputTriangles
       << ",\"welded_vertices\":" << r.clean.weldedVertices
@@ -169,6 +180,10 @@ std::string toJson(const CompileReport& r) {
       << ",\"dropped_duplicate\":" << r.clean.droppedDuplicate
       << ",\"output_vertices\":" << r.clean.outputVertices
       << ",\"output_triangles\":" << r.clean.outputTriangles << "},"
+      << "\"reach\":{\"applied\":" << (r.reach.applied ? "true" : "false")
+      << ",\"dropped\":" << r.reach.dropped << ",\"cells\":" << r.reach.cells
+      << ",\"reached_cells\":" << r.reach.reached << ",\"cell_metres\":" << r.reach.cellMetres
+      << ",\"leaked\":" << (r.reach.leaked ? "true" : "false") << "},"
       << "\"tree\":{\"nodes\":" << r.tree.nodes << ",\"leaves\":" << r.tree.leaves
       << ",\"empty_leaves\":" << r.tree.emptyLeaves << ",\"depth_max\":" << r.tree.depthMax
       << ",\"depth_mean\":" << r.tree.depthMean

@@ -58,6 +58,16 @@ void validate(const CompileSettings& s) {
           "max blob bytes must be 1 to 2^31 - 1");
   require(s.tree.triangleCandidates >= 1 && s.tree.triangleCandidates <= 256,
           "triangle candidates must be 1 to 256");
+  const double rxz = s.reach.radiusXZ, ry = s.reach.radiusY;
+  require(std::isfinite(rxz) && std::isfinite(ry) && rxz > 0.01 && ry > 0.01 && rxz <= 8 * ry &&
+              ry <= 8 * rxz,
+          "body radii must be finite, > 0.01 m, and within a factor 8 of each other");
+  require(s.reach.maxCells >= 1 && s.reach.maxCells <= (std::uint64_t(1) << 32),
+          "reach grid cells must be 1 to 2^32");
+  require(s.reach.cellOfRadius >= 0.05 && s.reach.cellOfRadius <= 0.4,
+          "reach cell must be 0.05 to 0.4 of the smaller radius");
+  for (const Eigen::Vector3d& p : s.reach.from)
+    require(p.allFinite(), "reach points must be finite");
 }
 
 std::string describeOptions(const CompileSettings& s) {
@@ -70,6 +80,10 @@ std::string describeOptions(const CompileSettings& s) {
       << " query-reach=" << s.tree.queryReach << " candidates=" << toString(s.tree.candidates)
       << " axis-candidates=" << s.tree.axisCandidatesPerAxis
       << " triangle-candidates=" << s.tree.triangleCandidates;
+  // The reach rule shapes the output too: how many points and which body.
+  if (!s.reach.from.empty())
+    out << " reach-points=" << s.reach.from.size() << " body-radii=" << s.reach.radiusXZ << ","
+        << s.reach.radiusY;
   return out.str();
 }
 

@@ -2,10 +2,12 @@
 // bspc/settings.h: every knob of a compile, with its default, unit and limits.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <functional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace bspc {
 
@@ -116,11 +118,38 @@ struct LimitSettings {
   std::uint64_t maxMemoryBytes = 0;
 };
 
+/// The reach rule (`--reach-from`, `--body-radii`). Off while `from` is
+/// empty: a level whose playable space is not known keeps every face.
+struct ReachSettings {
+  /// Body centres in the level's free space, metres, in the compiled level's
+  /// frame (after --up and --scale): spawn points lifted to where a body's
+  /// centre is. A point within the body's size of a surface is an error.
+  std::vector<Eigen::Vector3d> from;
+  /// The smallest body the level must hold, metres: its horizontal and
+  /// vertical radii (the README's player: 0.45 and 0.85). A face is kept
+  /// when a body of these radii (or any larger) can touch it from somewhere
+  /// connected to `from`. Each > 0.01 and finite; their ratio at most 8.
+  double radiusXZ = 0.45;
+  double radiusY = 0.85;
+  /// Most grid cells the flood may use (1 bit each, twice: 64 MiB at the
+  /// default). A level that needs more at cellOfRadius gets larger cells (up
+  /// to 0.6 of the smaller radius: fewer faces dropped); one that needs more
+  /// even then (about 230 x 100 x 230 m for the default body) is left whole,
+  /// with a warning. 1 to 2^32.
+  std::uint64_t maxCells = std::uint64_t(1) << 28;
+  /// The grid's cell, as a fraction of the smaller radius: 0.05 to 0.4.
+  /// Smaller cells drop more faces (the flood and the keep test are within
+  /// a cell of exact) and take longer: the cells near surfaces grow as its
+  /// inverse square.
+  double cellOfRadius = 0.2;
+};
+
 struct CompileSettings {
   ImportSettings import;
   CleanSettings clean;
   TreeSettings tree;
   LimitSettings limits;
+  ReachSettings reach;
   /// Called with a one-line status now and then during long stages; may be
   /// empty. bspc prints it on stderr when that is a terminal.
   std::function<void(std::string_view)> progress;

@@ -1,0 +1,221 @@
+// SPDX-License-Identifier: MIT
+#include <bspc/compile.h>
+#include <bspc/reach.h>
+#include <bspf/movement.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <fstream>
+
+#include "support/test_support.h"
+
+namespace {
+
+using bspf::test::append;
+using bspf::test::boxMesh;
+using Eigen::Vector3d;
+
+// A closed room of 0.3 m slabs around the inside [0, 6] x [0, 3] x [0, 6]:
+// floor, ceiling and four walls, each a box of its own. `doorWidth` > 0 cuts
+// a door, 2.2 m high, centred in the +x wall.
+bspc::Mesh room(double doorWidth = 0) {
+  bspc::Mesh m = boxMesh({-0.3, -0.3, -0.3}, {6.3, 0, 6.3});
+  append(m, boxMesh({-0.3, 3, -0.3}, {6.3, 3.3, 6.3}));
+  append(m, boxMesh({-0.3, 0, -0.3}, {0, 3, 6.3}));
+  append(m, boxMesh({0, 0, -0.3}, {6, 3, 0}));
+  append(m, boxMesh({0, 0, 6}, {6, 3, 6.3}));
+  if (doorWidth == 0) {
+    append(m, boxMesh({6, 0, -0.3}, {6.3, 3, 6.3}));
+  } else {
+    append(m, boxMesh({6, 0, -0.3}, {6.3, 3, 3 - doorWidth / 2}));
+    append(m, boxMesh({6, 0, 3 + doorWidth / 2}, {6.3, 3, 6.3}));
+    append(m, boxMesh({6, 2.2, 3 - doorWidth / 2}, {6.3, 3, 3 + doorWidth / 2}));
+  }
+  return m;
+}
+
+// A second room beyond the first one's +x wall: x from 6.3 to 12.
+bspc::Mesh roomBeyond() {
+  bspc::Mesh m = boxMesh({6.3, -0.3, -0.3}, {12.3, 0, 6.3});
+  append(m, boxMesh({6.3, 3, -0.3}, {12.3, 3.3, 6.3}));
+  append(m, boxMesh({12, 0, -0.3}, {12.3, 3, 6.3}));
+  append(m, boxMesh({6.3, 0, -0.3}, {12, 3, 0}));
+  append(m, boxMesh({6.3, 0, 6}, {12, 3, 6.3}));
+  return m;
+}
+
+bspc::ReachSettings reachFrom(const Vector3d& point) {
+  bspc::ReachSettings s;
+  s.from = {point};
+  return s;
+}
+
+Vector3d centroid(const bspc::Mesh& m, const std::array<std::uint32_t, 3>& t) {
+  return (m.vertices[t[0]] + m.vertices[t[1]] + m.vertices[t[2]]) / 3;
+}
+
+Vector3d normal(const bspc::Mesh& m, const std::array<std::uint32_t, 3>& t) {
+  return (m.vertices[t[1]] - m.vertices[t[0]])
+      .cross(m.vertices[t[2]] - m.vertices[t[0]])
+      .normalized();
+}
+
+}  // namespace
+
+TEST_CASE("of a closed room, only the faces looking into it are kept; a box outside it is dropped",
+          "[compiler][reach]") {
+  bspc::Mesh mesh = room();
+  append(mesh, boxMesh({10, 0, 0}, {11, 1, 1}));
+  bspc::ReachReport report;
+  std::vector<std::string> warnings;
+  const bspc::Mesh kept =
+      bspc::dropUnreachableFaces(mesh, reachFrom({3, 1.5, 3}), report, warnings);
+  CHECK(report.applied);
+  CHECK_FALSE(report.leaked);
+  CHECK(warnings.empty());
+  // The six inner faces, two triangles each: everything else is the slabs'
+  // outsides, their ends buried in each other, and the lone box.
+  REQUIRE(kept.triangles.size() == 12);
+  CHECK(report.dropped == mesh.triangles.size() - 12);
+  const Vector3d middle(3, 1.5, 3);
+  for (const auto& t : kept.triangles) {
+    const Vector3d c = centroid(kept, t);
+    CHECK(normal(kept, t).dot(middle - c) > 0);  // faces the inside
+    CHECK(c.x() >= -0.31);
+    CHECK(c.x() <= 6.31);
+  }
+  // No vertex left over that no triangle uses.
+  CHECK(kept.vertices.size() <= 3 * kept.triangles.size());
+}
+
+TEST_CASE(
+    "a room behind a door narrower than the body is out of reach, behind a wide one it is not",
+    "[compiler][reach]") {
+  const auto keptBeyond = [](double doorWidth) {
+    bspc::Mesh mesh = room(doorWidth);
+    append(mesh, roomBeyond());
+    bspc::ReachReport report;
+    std::vector<std::string> warnings;
+    const bspc::Mesh kept =
+        bspc::dropUnreachableFaces(mesh, reachFrom({3, 1.5, 3}), report, warnings);
+    int beyond = 0;
+    for (const auto& t : kept.triangles) beyond += centroid(kept, t).x() > 6.5;
+    return beyond;
+  };
+  // The default body is 0.9 m wide: a 0.6 m door stops it, a 1.2 m one not.
+  CHECK(keptBeyond(0.6) == 0);
+  CHECK(keptBeyond(1.2) >= 10);  // the far room's floor, ceiling and walls
+}
+
+TEST_CASE("a larger body keeps fewer faces: it cannot pass where a small one can",
+          "[compiler][reach]") {
+  bspc::Mesh mesh = room(1.2);
+  append(mesh, roomBeyond());
+  std::vector<std::string> warnings;
+  bspc::ReachReport small, large;
+  bspc::ReachSettings settings = reachFrom({3, 1.5, 3});
+  const std::size_t smallKept =
+      bspc::dropUnreachableFaces(mesh, settings, small, warnings).triangles.size();
+  // 1.6 m wide: not through a 1.2 m door (the grid may count an opening up
+  // to a fifth narrower than the body as passable, never a narrower one).
+  settings.radiusXZ = 0.8;
+  const std::size_t largeKept =
+      bspc::dropUnreachableFaces(mesh, settings, large, warnings).triangles.size();
+  CHECK(largeKept < smallKept);
+}
+
+TEST_CASE("points a body cannot be at are refused with the point named", "[compiler][reach]") {
+  const bspc::Mesh mesh = room();
+  bspc::ReachReport report;
+  std::vector<std::string> warnings;
+  SECTION("outside the level's bounds") {
+    CHECK_THROWS_WITH(bspc::dropUnreachableFaces(mesh, reachFrom({30, 1, 3}), report, warnings),
+                      Catch::Contains("point 1") && Catch::Contains("outside the level's bounds"));
+  }
+  SECTION("closer to the floor than the body's height") {
+    CHECK_THROWS_WITH(bspc::dropUnreachableFaces(mesh, reachFrom({3, 0.2, 3}), report, warnings),
+                      Catch::Contains("point 1") && Catch::Contains("within a body's size"));
+  }
+}
+
+TEST_CASE(
+    "reach points files: one x y z a line, comments and blank lines skipped, errors name the "
+    "line",
+    "[compiler][reach]") {
+  const auto dir = bspf::test::freshTempDir("reach");
+  const auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir / name) << text;
+    return dir / name;
+  };
+  const auto points = bspc::readReachPoints(write("good.txt", "# spawns\n1 2 3\n\n  4 5 6\n"));
+  REQUIRE(points.size() == 2);
+  CHECK(points[1] == Vector3d(4, 5, 6));
+  CHECK_THROWS_WITH(bspc::readReachPoints(write("bad.txt", "1 2 3\n1 2\n")),
+                    Catch::Contains("bad.txt:2") && Catch::Contains("three finite numbers"));
+  CHECK_THROWS_WITH(bspc::readReachPoints(write("nan.txt", "1 nan 3\n")),
+                    Catch::Contains("nan.txt:1"));
+  CHECK_THROWS_WITH(bspc::readReachPoints(write("extra.txt", "1 2 3 4\n")),
+                    Catch::Contains("extra.txt:1"));
+  CHECK_THROWS_WITH(bspc::readReachPoints(write("empty.txt", "# nothing\n")),
+                    Catch::Contains("no points"));
+  CHECK_THROWS_WITH(bspc::readReachPoints(dir / "missing.txt"), Catch::Contains("missing.txt"));
+}
+
+TEST_CASE("a level too large for the reach grid keeps every face, with a warning",
+          "[compiler][reach]") {
+  const bspc::Mesh mesh = room();
+  bspc::ReachSettings settings = reachFrom({3, 1.5, 3});
+  settings.maxCells = 1000;
+  bspc::ReachReport report;
+  std::vector<std::string> warnings;
+  const bspc::Mesh kept = bspc::dropUnreachableFaces(mesh, settings, report, warnings);
+  CHECK_FALSE(report.applied);
+  CHECK(kept.triangles.size() == mesh.triangles.size());
+  REQUIRE(warnings.size() == 1);
+  CHECK_THAT(warnings[0], Catch::Contains("every face is kept"));
+}
+
+// The guarantee that matters: no body ever touches a dropped face, so both
+// narrow phases move every body exactly as they do with the whole level.
+TEST_CASE("bodies move bit for bit the same with and without the faces --reach-from drops",
+          "[compiler][reach]") {
+  const auto dir = bspf::test::freshTempDir("reach-arena");
+  const auto source = bspf::test::samplesDir() / "arena.obj";
+  bspc::CompileSettings whole;
+  bspc::CompileSettings reach;
+  reach.reach.from = bspc::readReachPoints(bspf::test::samplesDir() / "arena.spawns.txt");
+  const bspc::CompileReport wholeReport = bspc::compileFile(source, dir / "whole.bspf", whole);
+  const bspc::CompileReport reachReport = bspc::compileFile(source, dir / "reach.bspf", reach);
+  REQUIRE(reachReport.reach.dropped > 0);
+  CHECK(reachReport.triangles + reachReport.reach.dropped == wholeReport.triangles);
+  const bspf::OpenResult a = bspf::openWorld(dir / "whole.bspf");
+  const bspf::OpenResult b = bspf::openWorld(dir / "reach.bspf");
+  REQUIRE(a);
+  REQUIRE(b);
+  for (const bspf::CollisionMethod method :
+       {bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep}) {
+    std::vector<bspf::Body> bodiesA, bodiesB;
+    for (std::size_t i = 0; i < reach.reach.from.size(); ++i) {
+      bspf::Body body;
+      body.position = reach.reach.from[i].cast<float>() + bspf::Vec3(0, 0.3f, 0);
+      body.radii = {0.45f, 0.85f};
+      body.settings.method = method;
+      bodiesA.push_back(body);
+    }
+    bodiesB = bodiesA;
+    bspf::StepScratch scratch;
+    int differing = 0;
+    for (int frame = 0; frame < 400; ++frame) {
+      for (std::size_t i = 0; i < bodiesA.size(); ++i) {
+        // Each body walks a direction of its own, turning now and then, into
+        // walls, over edges and down ramps.
+        const float angle = 2.4f * float(i) + 0.9f * float(frame / 60);
+        const bspf::Vec3 force(40 * std::cos(angle), 0, 40 * std::sin(angle));
+        bspf::stepBody(*a.world, bodiesA[i], force, 1 / 60.0f, scratch);
+        bspf::stepBody(*b.world, bodiesB[i], force, 1 / 60.0f, scratch);
+        differing += bodiesA[i].position != bodiesB[i].position;
+      }
+    }
+    CHECK(differing == 0);
+  }
+}
