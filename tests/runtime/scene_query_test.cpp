@@ -306,14 +306,6 @@ void checkAllQueries(const std::string& name, const bspf::World& world, int rays
             << " found): all agree\n";
 }
 
-bspf::World compileShared(const std::string& name) {
-  const std::filesystem::path out = bspf::test::freshTempDir("scene_query") / (name + ".bspf");
-  bspc::compileFile(bspf::test::sharedLevelsDir() / (name + ".obj"), out, {});
-  const bspf::OpenResult opened = bspf::openWorld(out);
-  REQUIRE(opened);
-  return *opened.world;
-}
-
 // A random soup of small triangles in a deep tree: many planes to get wrong.
 bspf::test::CompiledMesh soup() {
   std::mt19937 rng(5);
@@ -344,6 +336,16 @@ TEST_CASE("each scene query gives the brute-force answer on the samples and a ra
 
 // Not in the Windows build (tests/windows): it compiles OBJ files (assimp).
 #ifndef _WIN32
+namespace {
+bspf::World compileShared(const std::string& name) {
+  const std::filesystem::path out = bspf::test::freshTempDir("scene_query") / (name + ".bspf");
+  bspc::compileFile(bspf::test::sharedLevelsDir() / (name + ".obj"), out, {});
+  const bspf::OpenResult opened = bspf::openWorld(out);
+  REQUIRE(opened);
+  return *opened.world;
+}
+}  // namespace
+
 TEST_CASE("each scene query gives the brute-force answer on the shared levels",
           "[runtime][query][scene-query][shared-levels]") {
   BSPF_SKIP_WITHOUT_SHARED_LEVELS();
@@ -393,6 +395,23 @@ TEST_CASE("a ray stops at maxDistance: a wall beyond it is a miss, at it a hit",
   CHECK_FALSE(bspf::castRay(world, {1, 1.5f, 0}, {1, 0, 0}, 0));
 }
 
+TEST_CASE("a ray starting on a wall's face, going into the wall, meets that face at distance 0",
+          "[runtime][query][scene-query]") {
+  // The room's inner faces lie in the tree's split planes, listed on one
+  // side only: the walk must reach them from the other side too.
+  const bspf::World world = bspf::test::compileSample("box_room");
+  const std::pair<Vec3, Vec3> starts[] = {
+      {{3, 1.5f, 0.5f}, {1, 0, 0}},   {{-3, 1.5f, 0.5f}, {-1, 0, 0}}, {{0.5f, 1.5f, 3}, {0, 0, 1}},
+      {{0.5f, 1.5f, -3}, {0, 0, -1}}, {{0.5f, 0, 0.5f}, {0, -1, 0}},  {{0.5f, 3, 0.5f}, {0, 1, 0}}};
+  for (const auto& [origin, into] : starts) {
+    INFO("from " << origin.transpose() << " along " << into.transpose());
+    const auto hit = bspf::castRay(world, origin, into, 10);
+    REQUIRE(hit);
+    CHECK(hit->distance == 0);
+    CHECK(hit->normal.isApprox(-into));
+  }
+}
+
 TEST_CASE("a ray parallel to a face misses it, tilted towards it hits",
           "[runtime][query][scene-query]") {
   const bspf::test::CompiledMesh slab(bspf::test::boxMesh({-5, -1, -5}, {5, 0, 5}));
@@ -432,7 +451,8 @@ TEST_CASE("a batch of rays gives each ray's castRay answer", "[runtime][query][s
   std::vector<bspf::Ray> rays;
   for (const Probe& p : randomProbes(world, 500, 3, 2.0f))
     rays.push_back({p.point, p.direction, p.length});
-  std::vector<std::optional<bspf::RayHit>> hits(rays.size());
+  // Filled with a hit no query gives, so an entry left unwritten shows.
+  std::vector<std::optional<bspf::RayHit>> hits(rays.size(), bspf::RayHit{-1.0f});
   bspf::castRays(world, rays, hits, RayFaces::Both);
   int met = 0;
   for (std::size_t i = 0; i < rays.size(); ++i) {
