@@ -108,4 +108,25 @@ void BulletPeer::step(Body& body, const Vec3& force, float dt, int maxIterations
   for (int i = 0; i < slide.contactCount; ++i) report.contactNormals[i] = slide.contacts[i].normal;
 }
 
+float BulletPeer::rayFraction(const Vec3& from, const Vec3& to) const {
+  const Impl& m = *impl_;
+  const Vec3 toSphere(1 / m.radii.xz, 1 / m.radii.y, 1 / m.radii.xz);
+  const btVector3 start = toBt(from.cwiseProduct(toSphere)), end = toBt(to.cwiseProduct(toSphere));
+  btCollisionWorld::ClosestRayResultCallback hit(start, end);
+  m.collisionWorld->rayTest(start, end, hit);
+  return hit.hasHit() ? hit.m_closestHitFraction : -1.0f;
+}
+
+float BulletPeer::castFraction(const Vec3& from, const Vec3& to) const {
+  const Impl& m = *impl_;
+  const Vec3 toSphere(1 / m.radii.xz, 1 / m.radii.y, 1 / m.radii.xz);
+  const btVector3 start = toBt(from.cwiseProduct(toSphere)), end = toBt(to.cwiseProduct(toSphere));
+  btTransform startPose = btTransform::getIdentity(), endPose = btTransform::getIdentity();
+  startPose.setOrigin(start);
+  endPose.setOrigin(end);
+  btCollisionWorld::ClosestConvexResultCallback hit(start, end);
+  m.collisionWorld->convexSweepTest(&m.sphere, startPose, endPose, hit);
+  return hit.hasHit() ? hit.m_closestHitFraction : -1.0f;
+}
+
 }  // namespace bspf::bench

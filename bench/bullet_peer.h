@@ -42,6 +42,17 @@ class BulletPeer {
   /// `maxIterations` slides. Fills `report`'s iterations, refused and grounded.
   void step(Body& body, const Vec3& force, float dt, int maxIterations, StepReport& report) const;
 
+  /// Bullet's ray test (btCollisionWorld::rayTest, closest hit, either face)
+  /// of the segment `from` -> `to` (metres): the fraction of the segment at
+  /// the hit, or -1 for a miss. Run in the peer's scaled space, which keeps
+  /// fractions (for the scene-query benchmark, bench/query_bench.cpp).
+  float rayFraction(const Vec3& from, const Vec3& to) const;
+
+  /// Bullet's convex cast (convexSweepTest, closest hit) of the body's
+  /// ellipsoid from centre `from` to `to` (metres), as the step sweeps it:
+  /// the fraction of the path at first contact, or -1 for a miss.
+  float castFraction(const Vec3& from, const Vec3& to) const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

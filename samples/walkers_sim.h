@@ -17,6 +17,7 @@
 
 #include <bspf/movement.h>
 #include <bspf/query.h>
+#include <bspf/scene_query.h>
 #include <bspf/thread_pool.h>
 #include <bspf/world.h>
 
@@ -30,6 +31,7 @@
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <span>
 #include <sstream>
 #include <string>
@@ -188,49 +190,21 @@ inline bool bodyClear(const World& world, const Vec3& centre, EllipsoidRadii rad
   return true;
 }
 
-// What the ray from `origin` along unit `direction` (up to `length`) meets
+// What the ray from `origin` along `direction` (up to `length`) meets
 // first: nothing, the front of a triangle, or the back of one (the origin is
-// then inside a closed solid). At equal distances a back face wins: the ray
-// leaves a solid where another touches it. (A two-sided surface, a
-// back-to-back pair, then counts as a back too: a false "inside" that only
-// costs a placement attempt.)
+// then inside a closed solid). At equal distances (within 10 um) a back face
+// wins: the ray leaves a solid where another touches it. (A two-sided
+// surface, a back-to-back pair, then counts as a back too: a false "inside"
+// that only costs a placement attempt.)
 enum class RayHit { Nothing, Front, Back };
 
 inline RayHit firstRayHit(const World& world, const Vec3& origin, const Vec3& direction,
-                          float length, SweepScratch& scratch,
-                          std::vector<std::uint32_t>& candidates) {
-  collectCandidateTriangles(world, origin, origin + direction * length, {1e-3f, 1e-3f}, scratch,
-                            candidates);
-  float nearest = std::numeric_limits<float>::infinity();
-  bool front = false;
-  for (const std::uint32_t t : candidates) {
-    Vec3 a, b, c;
-    triangleVertices(world, t, a, b, c);
-    // Moller-Trumbore, two-sided.
-    const Vec3 e1 = b - a, e2 = c - a;
-    const Vec3 h = direction.cross(e2);
-    const float det = e1.dot(h);
-    if (std::abs(det) < 1e-12f) continue;
-    const float inv = 1 / det;
-    const Vec3 s = origin - a;
-    const float u = inv * s.dot(h);
-    if (u < 0 || u > 1) continue;
-    const Vec3 q = s.cross(e1);
-    const float v = inv * direction.dot(q);
-    if (v < 0 || u + v > 1) continue;
-    const float distance = inv * e2.dot(q);
-    if (distance <= 0 || distance > length) continue;
-    const bool isFront = toVec3(world.trianglePlanes()[t].face().normal()).dot(direction) < 0;
-    if (distance < nearest - 1e-5f) {
-      nearest = distance;
-      front = isFront;
-    } else if (distance <= nearest + 1e-5f) {
-      nearest = std::min(nearest, distance);
-      front = front && isFront;
-    }
-  }
-  if (!std::isfinite(nearest)) return RayHit::Nothing;
-  return front ? RayHit::Front : RayHit::Back;
+                          float length) {
+  const std::optional<bspf::RayHit> front =
+      castRay(world, origin, direction, length, RayFaces::Front);
+  const float backReach = front ? front->distance + 1e-5f : length;
+  if (castRay(world, origin, direction, backReach, RayFaces::Back)) return RayHit::Back;
+  return front ? RayHit::Front : RayHit::Nothing;
 }
 
 }  // namespace detail
@@ -312,8 +286,7 @@ inline Points placeOnFloor(const World& world, int agents, EllipsoidRadii radii,
     if (!detail::bodyClear(world, centre, grown, scratch, candidates)) continue;
     bool open = true;
     for (std::size_t r = 0; r < rays.size() && open; ++r) {
-      const detail::RayHit hit =
-          detail::firstRayHit(world, centre, rays[r], rayLength, scratch, candidates);
+      const detail::RayHit hit = detail::firstRayHit(world, centre, rays[r], rayLength);
       open = hit == detail::RayHit::Front || (r == 0 && hit == detail::RayHit::Nothing);
     }
     if (open) result.points.push_back(centre);

@@ -26,31 +26,21 @@ struct Sweep {
 // Sweeps of all sizes, half starting near a surface (where bodies are), half
 // anywhere in the level's bounds.
 std::vector<Sweep> randomSweeps(const bspf::World& world, int count, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> unit(0.f, 1.f);
-  std::normal_distribution<float> gauss;
-  std::uniform_int_distribution<std::size_t> pick(0, world.triangles().size() - 1);
-  const Vec3 low = bspf::toVec3(*world.blob().bounds_min());
-  const Vec3 high = bspf::toVec3(*world.blob().bounds_max());
+  bspf::test::LevelSampler random(world, seed);
   std::vector<Sweep> sweeps;
   for (int i = 0; i < count; ++i) {
     Sweep s;
-    s.radii = {0.05f + 1.5f * unit(rng), 0.05f + 2.0f * unit(rng)};
+    s.radii = {0.05f + 1.5f * random.unit(), 0.05f + 2.0f * random.unit()};
     if (i % 2 == 0) {
-      const std::size_t t = pick(rng);
-      const auto& tri = world.triangles()[t];
-      float u = unit(rng), v = unit(rng);
-      if (u + v > 1) u = 1 - u, v = 1 - v;
-      const Vec3 a = bspf::toVec3(world.vertices()[tri.v0()]);
-      const Vec3 b = bspf::toVec3(world.vertices()[tri.v1()]);
-      const Vec3 c = bspf::toVec3(world.vertices()[tri.v2()]);
+      const std::uint32_t t = random.triangle();
+      const float u = random.unit(), v = random.unit();
       const Vec3 n = bspf::toVec3(world.trianglePlanes()[t].face().normal());
-      s.from = a + u * (b - a) + v * (c - a) + n * (3.0f * unit(rng) - 1.0f);
+      s.from = bspf::test::pointOnTriangle(world, t, u, v) + n * (3.0f * random.unit() - 1.0f);
     } else {
-      s.from = low + (high - low).cwiseProduct(Vec3(unit(rng), unit(rng), unit(rng)));
+      s.from = random.inBounds();
     }
-    const Vec3 direction = Vec3(gauss(rng), gauss(rng), gauss(rng)).normalized();
-    s.to = s.from + direction * (i % 7 == 0 ? 0.f : 4.0f * unit(rng) * unit(rng));
+    const Vec3 direction = random.direction();
+    s.to = s.from + direction * (i % 7 == 0 ? 0.f : 4.0f * random.unit() * random.unit());
     sweeps.push_back(s);
   }
   return sweeps;

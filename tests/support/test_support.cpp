@@ -54,6 +54,29 @@ std::vector<std::uint8_t> compile(const bspc::Mesh& mesh, const bspc::CompileSet
   return bspc::compileMesh(mesh, settings, "test-mesh", report);
 }
 
+Eigen::Vector3f pointOnTriangle(const bspf::World& world, std::uint32_t t, float u, float v) {
+  if (u + v > 1) u = 1 - u, v = 1 - v;
+  const auto& tri = world.triangles()[t];
+  const Eigen::Vector3f a = bspf::toVec3(world.vertices()[tri.v0()]);
+  const Eigen::Vector3f b = bspf::toVec3(world.vertices()[tri.v1()]);
+  const Eigen::Vector3f c = bspf::toVec3(world.vertices()[tri.v2()]);
+  return a + u * (b - a) + v * (c - a);
+}
+
+LevelSampler::LevelSampler(const bspf::World& world, std::uint32_t seed)
+    : low(bspf::toVec3(*world.blob().bounds_min())),
+      high(bspf::toVec3(*world.blob().bounds_max())),
+      rng_(seed),
+      pick_(0, world.triangles().size() - 1) {}
+
+Eigen::Vector3f LevelSampler::direction() {
+  return Eigen::Vector3f(gauss_(rng_), gauss_(rng_), gauss_(rng_)).normalized();
+}
+
+Eigen::Vector3f LevelSampler::inBounds() {
+  return low + (high - low).cwiseProduct(Eigen::Vector3f(unit(), unit(), unit()));
+}
+
 bspf::World compileSample(const std::string& name) {
 #ifdef BSPF_SAMPLE_BLOBS_DIR
   // The Windows build has no importer: the host's bspc compiled the samples

@@ -4,12 +4,14 @@
 
 #include <bspc/compile.h>
 #include <bspc/mesh.h>
+#include <bspf/geometry.h>
 #include <bspf/world.h>
 
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <random>
 #include <span>
 #include <string>
 #include <vector>
@@ -65,6 +67,34 @@ struct CompiledMesh {
   bspf::World world;
   explicit CompiledMesh(const bspc::Mesh& mesh)
       : bytes(compile(mesh)), world(*bspf::viewWorld(bytes.span()).world) {}
+};
+
+/// The point of triangle `t` of `world` with weights u and v on its second
+/// and third corners, folded back into the triangle when u + v > 1 (so u, v
+/// uniform in [0, 1) give a point uniform over its area). Metres.
+Eigen::Vector3f pointOnTriangle(const bspf::World& world, std::uint32_t t, float u, float v);
+
+/// Seeded random numbers over a level, for the query tests: the same
+/// sequence on every run and platform's build of the same compiler.
+class LevelSampler {
+ public:
+  LevelSampler(const bspf::World& world, std::uint32_t seed);
+  /// Uniform in [0, 1).
+  float unit() { return unit_(rng_); }
+  /// A uniform random unit vector.
+  Eigen::Vector3f direction();
+  /// A uniform random triangle index.
+  std::uint32_t triangle() { return std::uint32_t(pick_(rng_)); }
+  /// A uniform random point in the level's bounds.
+  Eigen::Vector3f inBounds();
+  /// The level's bounds, metres.
+  Eigen::Vector3f low, high;
+
+ private:
+  std::mt19937 rng_;
+  std::uniform_real_distribution<float> unit_{0.f, 1.f};
+  std::normal_distribution<float> gauss_;
+  std::uniform_int_distribution<std::size_t> pick_;
 };
 
 /// Compiles samples/NAME.obj with default settings into a temp directory
