@@ -58,6 +58,7 @@ void validate(const CompileSettings& s) {
           "max blob bytes must be 1 to 2^31 - 1");
   require(s.tree.triangleCandidates >= 1 && s.tree.triangleCandidates <= 256,
           "triangle candidates must be 1 to 256");
+  require(s.threads <= 1024, "threads must be 0 (every core) to 1024");
 }
 
 std::string describeOptions(const CompileSettings& s) {
