@@ -82,10 +82,12 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
   for (std::string& warning : warnings) report.warnings.push_back(std::move(warning));
   say(settings, kTreeFirstPercent, "build tree");
   std::function<void(int)> treeProgress;
+  int shown = kTreeFirstPercent;  // buildTree calls one at a time
   if (settings.progress)
     treeProgress = [&](int percent) {
-      say(settings, kTreeFirstPercent + percent * (kTreeLastPercent - kTreeFirstPercent) / 100,
-          "build tree");
+      const int overall =
+          kTreeFirstPercent + percent * (kTreeLastPercent - kTreeFirstPercent) / 100;
+      if (overall > shown) say(settings, shown = overall, "build tree");
     };
   // Workers only when there is more than one thread to run on.
   std::optional<bspf::ThreadPool> pool;
