@@ -45,7 +45,8 @@ std::string namingOption(const std::string& message, const bspc::CompileSettings
       {"query reach", "--query-reach", s.tree.queryReach},
       {"axis candidates", "--axis-candidates", s.tree.axisCandidatesPerAxis},
       {"triangle candidates", "--triangle-candidates", s.tree.triangleCandidates},
-      {"body radii", "--body-radii", s.reach.radiusXZ}};
+      {"body radii", "--body-radii", s.reach.radiusXZ},
+      {"threads", "--threads", s.threads}};
   const std::string prefix = "invalid setting: ";
   if (message.rfind(prefix, 0) != 0) return message;
   const std::string rest = message.substr(prefix.size());
@@ -75,7 +76,7 @@ int main(int argc, char** argv) {
   CLI::App app{"bspc: compile a level mesh (any format assimp reads) into a .bspf collision blob",
                "bspc"};
   bspc::CompileSettings settings;
-  std::string input, output, infoPath, statsJson;
+  std::string input, output, infoPath, statsJson, exportObj;
   bool quiet = false;
 
   app.set_version_flag("--version", "bspc " BSPF_VERSION " (format version " +
@@ -153,7 +154,16 @@ int main(int argc, char** argv) {
       ->expected(2)
       ->type_name("XZ Y")
       ->default_str("0.45 0.85");
+  app.add_option("--threads", settings.threads,
+                 "Threads for the tree and the planes (0: every core); the blob is the same "
+                 "for any count")
+      ->type_name("N")
+      ->capture_default_str();
   app.add_option("--stats-json", statsJson, "Also write the compile report as JSON to this file")
+      ->type_name("FILE");
+  app.add_option("--export-obj", exportObj,
+                 "Also write the compiled collision model (what the runtime sees) as a Wavefront "
+                 "OBJ to this file")
       ->type_name("FILE");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors and warnings");
   app.footer(R"(Examples:
@@ -219,7 +229,7 @@ command line (the error names the option).)");
   }
   if (!quiet && ::isatty(STDERR_FILENO))
     settings.progress = [](std::string_view line) {
-      std::cerr << "\r\033[K" << line << std::flush;
+      std::cerr << "\r\033[Kbspc: " << line << std::flush;
     };
 
   if (!reachFrom.empty()) {
@@ -234,7 +244,8 @@ command line (the error names the option).)");
   // Ctrl-C or a kill during the compile removes the temporary files.
   bspc::removeTemporariesOnSignal();
   try {
-    const bspc::CompileReport report = bspc::compileFile(input, output, settings, statsJson);
+    const bspc::CompileReport report =
+        bspc::compileFile(input, output, settings, statsJson, exportObj);
     if (settings.progress) std::cerr << "\r\033[K";
     for (const std::string& warning : report.warnings)
       std::cerr << "bspc: warning: " << input << ": " << warning << "\n";

@@ -2,9 +2,15 @@
 #include <bspc/build_tree.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <exception>
 #include <limits>
+#include <mutex>
 #include <optional>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 #include <string>
 
 namespace bspc {
@@ -66,11 +72,215 @@ enum Side : std::uint8_t { kFront = 1, kBack = 2, kBoth = kFront | kBack };
 // Grows with the plane's offset, as float rounding of the plane does.
 double onPlaneTolerance(const Split& split) { return 1e-5 + 2e-7 * std::abs(split.distance); }
 
+// A node's triangles: in the order the node was given them, and, when axis
+// candidates are wanted, sorted by centroid along each axis (sorted once, at
+// the root; a child's lists are its parent's filtered, which keeps them
+// sorted), so a quantile is a look-up.
+struct Lists {
+  std::vector<std::uint32_t> order;
+  std::vector<std::uint32_t> byAxis[3];
+  std::size_t size() const { return order.size(); }
+};
+
+// The node's triangles as columns of doubles, for the split search: the
+// corners, the face normal, and each axis's lowest and highest corner. A
+// candidate is then counted in one pass over contiguous memory that the
+// compiler vectorises, with the same arithmetic, in the same order, as
+// classify: the counts, so the tree, are exactly classify's.
+struct Columns {
+  std::vector<double> corner[3][3];  // [corner][axis]
+  std::vector<double> normal[3];
+  std::vector<double> low[3], high[3];
+  std::size_t size = 0;
+
+  void gather(const std::vector<std::uint32_t>& triangles, const Mesh& mesh,
+              const std::vector<Eigen::Vector3d>& faceNormals) {
+    size = triangles.size();
+    for (auto& c : corner)
+      for (auto& axis : c) axis.resize(size);
+    for (int axis = 0; axis < 3; ++axis) {
+      normal[axis].resize(size);
+      low[axis].resize(size);
+      high[axis].resize(size);
+    }
+    for (std::size_t i = 0; i < size; ++i) {
+      const std::uint32_t t = triangles[i];
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector3d& v = mesh.vertices[mesh.triangles[t][k]];
+        for (int axis = 0; axis < 3; ++axis) corner[k][axis][i] = v[axis];
+      }
+      for (int axis = 0; axis < 3; ++axis) {
+        normal[axis][i] = faceNormals[t][axis];
+        low[axis][i] = std::min({corner[0][axis][i], corner[1][axis][i], corner[2][axis][i]});
+        high[axis][i] = std::max({corner[0][axis][i], corner[1][axis][i], corner[2][axis][i]});
+      }
+    }
+  }
+};
+
+struct Counts {
+  std::size_t front = 0, back = 0, both = 0;
+};
+
+// Tallies classify's answers from each triangle's lowest and highest signed
+// distance and, for one lying in the plane, the side its normal faces.
+struct Tally {
+  std::size_t front = 0, back = 0, both = 0;
+  void add(double lowest, double highest, double facing, double tolerance) {
+    const bool inPlane = highest <= tolerance && lowest >= -tolerance;
+    const bool reachesFront = inPlane ? facing >= 0 : highest > -tolerance;
+    const bool reachesBack = inPlane ? facing < 0 : lowest < tolerance;
+    front += reachesFront & !reachesBack;
+    back += reachesBack & !reachesFront;
+    both += reachesFront & reachesBack;
+  }
+};
+
+#ifdef __SSE2__
+// Tally on two triangles at once: the same decisions, lane by lane.
+struct TallySse2 {
+  __m128d above, below, zero = _mm_setzero_pd();
+  __m128i front = _mm_setzero_si128(), back = _mm_setzero_si128(), both = _mm_setzero_si128();
+  explicit TallySse2(double tolerance)
+      : above(_mm_set1_pd(tolerance)), below(_mm_set1_pd(-tolerance)) {}
+  void add(__m128d lowest, __m128d highest, __m128d facing) {
+    const __m128d inPlane = _mm_and_pd(_mm_cmple_pd(highest, above), _mm_cmpge_pd(lowest, below));
+    const __m128d facesFront = _mm_cmpge_pd(facing, zero);
+    const __m128d reachesFront = _mm_or_pd(_mm_and_pd(inPlane, facesFront),
+                                           _mm_andnot_pd(inPlane, _mm_cmpgt_pd(highest, below)));
+    const __m128d reachesBack = _mm_or_pd(_mm_andnot_pd(facesFront, inPlane),
+                                          _mm_andnot_pd(inPlane, _mm_cmplt_pd(lowest, above)));
+    // A mask lane is all ones, -1 as an integer: subtracting counts it.
+    front = _mm_sub_epi64(front, _mm_castpd_si128(_mm_andnot_pd(reachesBack, reachesFront)));
+    back = _mm_sub_epi64(back, _mm_castpd_si128(_mm_andnot_pd(reachesFront, reachesBack)));
+    both = _mm_sub_epi64(both, _mm_castpd_si128(_mm_and_pd(reachesFront, reachesBack)));
+  }
+  static std::size_t sum(__m128i v) {
+    std::uint64_t lanes[2];
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(lanes), v);
+    return std::size_t(lanes[0] + lanes[1]);
+  }
+  Counts counts() const { return {sum(front), sum(back), sum(both)}; }
+};
+#endif
+
+// classify of triangles [begin, end) of `c` against an axis-aligned split: the
+// normal's dot product with a corner is the corner's coordinate exactly, and
+// rounding is monotonic, so the lowest signed distance is the lowest
+// coordinate less the distance.
+Counts countAxisSplit(const Columns& c, std::size_t begin, std::size_t end, int axis,
+                      double distance, double tolerance) {
+  const double *low = c.low[axis].data(), *high = c.high[axis].data(),
+               *normal = c.normal[axis].data();
+  std::size_t i = begin;
+  Counts counts;
+#ifdef __SSE2__
+  TallySse2 lanes(tolerance);
+  const __m128d vd = _mm_set1_pd(distance);
+  for (; i + 2 <= end; i += 2)
+    lanes.add(_mm_sub_pd(_mm_loadu_pd(low + i), vd), _mm_sub_pd(_mm_loadu_pd(high + i), vd),
+              _mm_loadu_pd(normal + i));
+  counts = lanes.counts();
+#endif
+  Tally tally;
+  for (; i < end; ++i) tally.add(low[i] - distance, high[i] - distance, normal[i], tolerance);
+  return {counts.front + tally.front, counts.back + tally.back, counts.both + tally.both};
+}
+
+// classify of triangles [begin, end) of `c` against any split. Two at a
+// time with SSE2 where there is SSE2: the same operations in the same
+// order on each lane, so the same counts.
+Counts countSplit(const Columns& c, std::size_t begin, std::size_t end, const Eigen::Vector3d& n,
+                  double distance, double tolerance) {
+  const double nx = n.x(), ny = n.y(), nz = n.z();
+  std::size_t i = begin;
+  Counts counts;
+#ifdef __SSE2__
+  const __m128d vx = _mm_set1_pd(nx), vy = _mm_set1_pd(ny), vz = _mm_set1_pd(nz),
+                vd = _mm_set1_pd(distance);
+  TallySse2 lanes(tolerance);
+  for (; i + 2 <= end; i += 2) {
+    __m128d lowest = _mm_set1_pd(std::numeric_limits<double>::infinity());
+    __m128d highest = _mm_set1_pd(-std::numeric_limits<double>::infinity());
+    for (int k = 0; k < 3; ++k) {
+      const __m128d s =
+          _mm_sub_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(vx, _mm_loadu_pd(&c.corner[k][0][i])),
+                                           _mm_mul_pd(vy, _mm_loadu_pd(&c.corner[k][1][i]))),
+                                _mm_mul_pd(vz, _mm_loadu_pd(&c.corner[k][2][i]))),
+                     vd);
+      lowest = _mm_min_pd(lowest, s);
+      highest = _mm_max_pd(highest, s);
+    }
+    const __m128d facing = _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_loadu_pd(&c.normal[0][i]), vx),
+                                                 _mm_mul_pd(_mm_loadu_pd(&c.normal[1][i]), vy)),
+                                      _mm_mul_pd(_mm_loadu_pd(&c.normal[2][i]), vz));
+    lanes.add(lowest, highest, facing);
+  }
+  counts = lanes.counts();
+#endif
+  Tally tally;
+  for (; i < end; ++i) {
+    double lowest = std::numeric_limits<double>::infinity();
+    double highest = -lowest;
+    for (int k = 0; k < 3; ++k) {
+      const double s =
+          (nx * c.corner[k][0][i] + ny * c.corner[k][1][i]) + nz * c.corner[k][2][i] - distance;
+      lowest = std::min(lowest, s);
+      highest = std::max(highest, s);
+    }
+    const double facing = (c.normal[0][i] * nx + c.normal[1][i] * ny) + c.normal[2][i] * nz;
+    tally.add(lowest, highest, facing, tolerance);
+  }
+  return {counts.front + tally.front, counts.back + tally.back, counts.both + tally.both};
+}
+
+// Runs `task(thread, first, last)` over [0, count) on `pool`, or on this
+// thread without one; an exception thrown by a task (out of memory) is
+// carried back to the caller instead of ending the process.
+void runParallel(bspf::ThreadPool* pool, std::size_t count, std::size_t chunk,
+                 const std::function<void(int, std::size_t, std::size_t)>& task) {
+  if (!pool) {
+    if (count) task(0, 0, count);
+    return;
+  }
+  std::mutex mutex;
+  std::exception_ptr failure;
+  pool->parallelFor(count, chunk, [&](int thread, std::size_t first, std::size_t last) {
+    try {
+      task(thread, first, last);
+    } catch (...) {
+      std::lock_guard lock(mutex);
+      if (!failure) failure = std::current_exception();
+    }
+  });
+  if (failure) std::rethrow_exception(failure);
+}
+
+// Appends the subtree `part` (its own numbering, root `root`) to `tree`;
+// returns the root's reference in `tree`. Appended right after its parent's
+// earlier subtrees, it lands where a build on one thread puts it.
+std::int32_t appendSubtree(BspTree& tree, const BspTree& part, std::int32_t root) {
+  const auto nodeOffset = static_cast<std::int32_t>(tree.nodes.size());
+  const auto leafOffset = static_cast<std::int32_t>(tree.leaves.size());
+  const auto entryOffset = static_cast<std::uint32_t>(tree.leafTriangles.size());
+  const auto moved = [&](std::int32_t child) {
+    return child >= 0 ? child + nodeOffset : child - leafOffset;
+  };
+  for (const bspf::schema::Node& node : part.nodes)
+    tree.nodes.emplace_back(node.split(), moved(node.front()), moved(node.back()));
+  for (const bspf::schema::Leaf& leaf : part.leaves)
+    tree.leaves.emplace_back(leaf.first() + entryOffset, leaf.count());
+  tree.leafTriangles.insert(tree.leafTriangles.end(), part.leafTriangles.begin(),
+                            part.leafTriangles.end());
+  tree.depth = std::max(tree.depth, part.depth);
+  return moved(root);
+}
+
 class TreeBuilder {
  public:
   TreeBuilder(const Mesh& mesh, const TreeSettings& settings,
-              const std::function<void(std::string_view)>& progress)
-      : mesh_(mesh), settings_(settings), progress_(progress) {
+              const std::function<void(int)>& progress, bspf::ThreadPool* pool)
+      : mesh_(mesh), settings_(settings), progress_(progress), pool_(pool) {
     faceNormals_.reserve(mesh.triangles.size());
     centroids_.reserve(mesh.triangles.size());
     for (const auto& t : mesh.triangles) {
@@ -81,19 +291,115 @@ class TreeBuilder {
     }
   }
 
+  // The top of the tree is split here, node by node, each node's candidates
+  // counted on every thread, down to subtrees small enough to share out
+  // (several per thread); the subtrees are then built on all threads at once,
+  // each on one, and put together in the order one thread would have made
+  // them. Which thread builds what never changes a split, so the tree is the
+  // same for any thread count.
   BspTree build() {
-    std::vector<std::uint32_t> all(mesh_.triangles.size());
-    for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
+    Lists all;
+    all.order.resize(mesh_.triangles.size());
+    for (std::uint32_t i = 0; i < all.size(); ++i) all.order[i] = i;
+    if (settings_.candidates != SplitCandidates::Triangle)
+      for (int axis = 0; axis < 3; ++axis) {
+        all.byAxis[axis] = all.order;
+        std::sort(all.byAxis[axis].begin(), all.byAxis[axis].end(),
+                  [&](std::uint32_t a, std::uint32_t b) {
+                    return centroids_[a][axis] < centroids_[b][axis] ||
+                           (centroids_[a][axis] == centroids_[b][axis] && a < b);
+                  });
+      }
     Box bounds{mesh_.vertices.front(), mesh_.vertices.front()};
     for (const Eigen::Vector3d& v : mesh_.vertices) {
       bounds.low = bounds.low.cwiseMin(v);
       bounds.high = bounds.high.cwiseMax(v);
     }
-    tree_.root = buildNode(all, bounds, 0);
-    return std::move(tree_);
+    const int threads = pool_ ? pool_->threadCount() : 1;
+    scratch_.resize(std::size_t(threads));
+    // One thread: the whole tree is one subtree.
+    shareSize_ = threads == 1 ? all.size() : all.size() / (8 * std::size_t(threads));
+    const std::int32_t top = expand(all, bounds, 0, 1.0);
+
+    std::vector<std::size_t> order(subtrees_.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    // Largest first, so no thread is left with a big one at the end.
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+      return subtrees_[a].lists.size() > subtrees_[b].lists.size();
+    });
+    runParallel(pool_, order.size(), 1, [&](int thread, std::size_t first, std::size_t last) {
+      for (std::size_t i = first; i < last; ++i) {
+        Subtree& s = subtrees_[order[i]];
+        s.root = buildNode(s.lists, s.cell, s.depth, s.share, s.tree, scratch_[thread]);
+      }
+    });
+    BspTree tree;
+    tree.root = assemble(top, tree);
+    return tree;
   }
 
  private:
+  // A part of the tree built on one thread, into its own arrays.
+  struct Subtree {
+    Lists lists;
+    Box cell;
+    std::uint32_t depth;
+    double share;  // of the mesh's triangles, for the progress line
+    BspTree tree;
+    std::int32_t root = -1;
+  };
+  // A node split before the subtrees are shared out. Children: >= 0 another
+  // top node, < 0 subtree -(child + 1).
+  struct TopNode {
+    Split split;
+    std::int32_t front = 0, back = 0;
+  };
+
+  std::int32_t expand(Lists& triangles, const Box& cell, std::uint32_t depth, double share) {
+    std::optional<Split> split;
+    if (triangles.size() > shareSize_ && triangles.size() > settings_.maxLeafTriangles &&
+        depth < settings_.maxDepth)
+      split = chooseSplit(triangles, cell, scratch_.front(), pool_);
+    if (!split) {
+      subtrees_.push_back({std::move(triangles), cell, depth, share, {}, -1});
+      return -static_cast<std::int32_t>(subtrees_.size());
+    }
+    Lists front, back;
+    partition(triangles, *split, front, back, scratch_.front().side);
+    const auto index = static_cast<std::int32_t>(top_.size());
+    top_.push_back({*split});
+    const double whole = double(front.size() + back.size());
+    const double backShare = share * double(back.size()) / whole;
+    const Box backCell = cell.clipped(*split, false);
+    const std::int32_t frontChild =
+        expand(front, cell.clipped(*split, true), depth + 1, share * double(front.size()) / whole);
+    const std::int32_t backChild = expand(back, backCell, depth + 1, backShare);
+    top_[std::size_t(index)].front = frontChild;
+    top_[std::size_t(index)].back = backChild;
+    return index;
+  }
+
+  // The top node or subtree `child` and everything below it, appended to
+  // `tree` in the order buildNode makes them; its reference there.
+  std::int32_t assemble(std::int32_t child, BspTree& tree) {
+    if (child < 0) {
+      const Subtree& s = subtrees_[std::size_t(-child - 1)];
+      return appendSubtree(tree, s.tree, s.root);
+    }
+    const TopNode& node = top_[std::size_t(child)];
+    const auto index = static_cast<std::int32_t>(tree.nodes.size());
+    tree.nodes.emplace_back();
+    const std::int32_t frontChild = assemble(node.front, tree);
+    const std::int32_t backChild = assemble(node.back, tree);
+    tree.nodes[std::size_t(index)] = bspf::schema::Node(toPlane(node.split), frontChild, backChild);
+    return index;
+  }
+
+  static bspf::schema::Plane toPlane(const Split& split) {
+    return bspf::schema::Plane(
+        bspf::schema::Vec3(split.normal.x(), split.normal.y(), split.normal.z()), split.distance);
+  }
+
   Side classify(std::uint32_t triangle, const Split& split) const {
     const Eigen::Vector3d n = split.normal.cast<double>();
     const double d = split.distance;
@@ -113,21 +419,41 @@ class TreeBuilder {
     return front && back ? kBoth : (front ? kFront : kBack);
   }
 
-  std::vector<Split> candidates(const std::vector<std::uint32_t>& triangles) const {
-    std::vector<Split> out;
-    const auto n = triangles.size();
+  // Splits `triangles` (emptied) into the two sides' lists, in their order;
+  // `side` is working memory, one entry a mesh triangle.
+  void partition(Lists& triangles, const Split& split, Lists& front, Lists& back,
+                 std::vector<std::uint8_t>& side) const {
+    side.resize(mesh_.triangles.size());
+    for (const std::uint32_t t : triangles.order) side[t] = classify(t, split);
+    const auto share = [&](std::vector<std::uint32_t>& from, std::vector<std::uint32_t>& toFront,
+                           std::vector<std::uint32_t>& toBack) {
+      for (const std::uint32_t t : from) {
+        if (side[t] & kFront) toFront.push_back(t);
+        if (side[t] & kBack) toBack.push_back(t);
+      }
+      from.clear();
+      from.shrink_to_fit();
+    };
+    share(triangles.order, front.order, back.order);
+    for (int axis = 0; axis < 3; ++axis)
+      share(triangles.byAxis[axis], front.byAxis[axis], back.byAxis[axis]);
+  }
+
+  // The candidates, each with the axis it is aligned with (-1: none).
+  void candidates(const Lists& lists, std::vector<std::pair<Split, int>>& out) const {
+    out.clear();
+    const auto n = lists.size();
+    const std::vector<std::uint32_t>& triangles = lists.order;
     if (settings_.candidates != SplitCandidates::Triangle) {
-      std::vector<double> coordinate(n);
       const std::uint32_t quantiles = settings_.axisCandidatesPerAxis;
       for (int axis = 0; axis < 3; ++axis) {
-        for (std::size_t i = 0; i < n; ++i) coordinate[i] = centroids_[triangles[i]][axis];
-        std::sort(coordinate.begin(), coordinate.end());
         float previous = std::numeric_limits<float>::quiet_NaN();
         for (std::uint32_t q = 1; q <= quantiles; ++q) {
-          const float at = static_cast<float>(coordinate[q * n / (quantiles + 1)]);
-          if (at == previous) continue;
-          previous = at;
-          out.push_back({Eigen::Vector3f::Unit(axis), at});
+          const std::uint32_t t = lists.byAxis[axis][q * n / (quantiles + 1)];
+          const float value = static_cast<float>(centroids_[t][axis]);
+          if (value == previous) continue;
+          previous = value;
+          out.push_back({{Eigen::Vector3f::Unit(axis), value}, axis});
         }
       }
     }
@@ -138,11 +464,24 @@ class TreeBuilder {
         const Eigen::Vector3f normal = faceNormals_[t].cast<float>();
         const auto distance =
             static_cast<float>(normal.cast<double>().dot(mesh_.vertices[mesh_.triangles[t][0]]));
-        out.push_back({normal, distance});
+        out.push_back({{normal, distance}, -1});
       }
     }
-    return out;
   }
+
+  // Per-thread working memory of the split search.
+  struct Scratch {
+    Columns columns;
+    std::vector<std::uint8_t> side;
+    std::vector<std::pair<Split, int>> candidates;
+    struct Counted {
+      Split split;
+      double frontTotal, backTotal, score;
+      std::optional<std::pair<Box, Box>> cells;  // front, back
+    };
+    std::vector<Counts> blockCounts;
+    std::vector<Counted> counted;
+  };
 
   // The best-scoring split among those that make progress on both sides and
   // pay for themselves: its expected query cost (one node test plus the triangles of each
@@ -154,107 +493,144 @@ class TreeBuilder {
   // reach no split of a dense cluster of tiny triangles pays (its
   // straddlers outweigh the gain), and such leaves grew to thousands of
   // triangles. At the cell's own scale a split pays unless it lists most
-  // triangles on both sides.
-  std::optional<Split> chooseSplit(const std::vector<std::uint32_t>& triangles,
-                                   const Box& cell) const {
-    // The candidates that make progress on both sides, with their counts.
-    struct Counted {
-      Split split;
-      double frontTotal, backTotal, both;
-    };
-    std::vector<Counted> counted;
-    for (const Split& split : candidates(triangles)) {
-      std::size_t front = 0, back = 0, both = 0;
-      for (const std::uint32_t t : triangles) {
-        switch (classify(t, split)) {
-          case kFront: ++front; break;
-          case kBack: ++back; break;
-          case kBoth: ++both; break;
+  // triangles on both sides. With a pool, the candidates are counted on all
+  // its threads.
+  std::optional<Split> chooseSplit(const Lists& lists, const Box& cell, Scratch& scratch,
+                                   bspf::ThreadPool* pool) const {
+    candidates(lists, scratch.candidates);
+    scratch.columns.gather(lists.order, mesh_, faceNormals_);
+    const std::size_t n = lists.size(), m = scratch.candidates.size();
+    // Block by block, every candidate counted on a block while it is in the
+    // cache; blocks shared between the threads, each block's counts kept
+    // apart and summed in order.
+    const std::size_t blocks = (n + kBlock - 1) / kBlock;
+    scratch.blockCounts.assign(blocks * m, Counts{});
+    runParallel(pool, blocks, 1, [&](int, std::size_t first, std::size_t last) {
+      for (std::size_t b = first; b < last; ++b) {
+        const std::size_t begin = b * kBlock, end = std::min(n, begin + kBlock);
+        for (std::size_t i = 0; i < m; ++i) {
+          const auto& [split, axis] = scratch.candidates[i];
+          const double tolerance = onPlaneTolerance(split);
+          scratch.blockCounts[b * m + i] =
+              axis >= 0
+                  ? countAxisSplit(scratch.columns, begin, end, axis, split.distance, tolerance)
+                  : countSplit(scratch.columns, begin, end, split.normal.cast<double>(),
+                               split.distance, tolerance);
         }
       }
-      if (front + both == triangles.size() || back + both == triangles.size()) continue;
-      counted.push_back({split, double(front + both), double(back + both), double(both)});
+    });
+    scratch.counted.clear();
+    const double count = static_cast<double>(n);
+    for (std::size_t i = 0; i < m; ++i) {
+      Counts c;
+      for (std::size_t b = 0; b < blocks; ++b) {
+        c.front += scratch.blockCounts[b * m + i].front;
+        c.back += scratch.blockCounts[b * m + i].back;
+        c.both += scratch.blockCounts[b * m + i].both;
+      }
+      if (c.front + c.both == n || c.back + c.both == n) continue;
+      const double frontTotal = double(c.front + c.both), backTotal = double(c.back + c.both);
+      const double score = settings_.balanceWeight * std::abs(frontTotal - backTotal) / count +
+                           settings_.splitWeight * double(c.both) / count;
+      scratch.counted.push_back(
+          {scratch.candidates[i].first, frontTotal, backTotal, score, std::nullopt});
     }
-    const double n = static_cast<double>(triangles.size());
-    auto best = [&](double reach) {
-      std::optional<Split> chosen;
-      double bestScore = std::numeric_limits<double>::infinity();
-      for (const Counted& c : counted) {
-        if (splitCost(cell, c.split, c.frontTotal, c.backTotal, reach) >= n) continue;
-        const double score = settings_.balanceWeight * std::abs(c.frontTotal - c.backTotal) / n +
-                             settings_.splitWeight * c.both / n;
-        if (score < bestScore) {
-          bestScore = score;
-          chosen = c.split;
-        }
+    // The lowest score that pays, the earliest candidate of equal scores:
+    // candidates in that order, the first that pays. Its cells are clipped
+    // only when asked, as most candidates never are.
+    std::stable_sort(scratch.counted.begin(), scratch.counted.end(),
+                     [](const auto& a, const auto& b) { return a.score < b.score; });
+    auto best = [&](double reach) -> std::optional<Split> {
+      const double whole = cell.reachVolume(reach);
+      for (auto& c : scratch.counted) {
+        if (!c.cells) c.cells = {cell.clipped(c.split, true), cell.clipped(c.split, false)};
+        const double cost = 1.0 + (c.cells->first.reachVolume(reach) * c.frontTotal +
+                                   c.cells->second.reachVolume(reach) * c.backTotal) /
+                                      whole;
+        if (cost < count) return c.split;
       }
-      return chosen;
+      return std::nullopt;
     };
     std::optional<Split> chosen = best(settings_.queryReach);
-    if (!chosen && triangles.size() > kDenseNodeTriangles)
+    if (!chosen && n > kDenseNodeTriangles)
       chosen = best(std::min(settings_.queryReach, 0.25 * (cell.high - cell.low).maxCoeff()));
     return chosen;
   }
 
-  double splitCost(const Box& cell, const Split& split, double frontTotal, double backTotal,
-                   double reach) const {
-    const double whole = cell.reachVolume(reach);
-    return 1.0 + (cell.clipped(split, true).reachVolume(reach) * frontTotal +
-                  cell.clipped(split, false).reachVolume(reach) * backTotal) /
-                     whole;
-  }
-
-  std::int32_t makeLeaf(std::vector<std::uint32_t>& triangles, std::uint32_t depth) {
+  std::int32_t makeLeaf(Lists& lists, std::uint32_t depth, double share, BspTree& tree) {
+    std::vector<std::uint32_t>& triangles = lists.order;
     std::sort(triangles.begin(), triangles.end());
-    const auto first = static_cast<std::uint32_t>(tree_.leafTriangles.size());
-    tree_.leafTriangles.insert(tree_.leafTriangles.end(), triangles.begin(), triangles.end());
-    tree_.leaves.emplace_back(first, static_cast<std::uint32_t>(triangles.size()));
-    tree_.depth = std::max(tree_.depth, depth);
-    if (progress_ && tree_.leaves.size() % 4096 == 0)
-      progress_("build tree: " + std::to_string(tree_.leaves.size()) + " leaves");
-    return -static_cast<std::int32_t>(tree_.leaves.size());
+    const auto first = static_cast<std::uint32_t>(tree.leafTriangles.size());
+    tree.leafTriangles.insert(tree.leafTriangles.end(), triangles.begin(), triangles.end());
+    tree.leaves.emplace_back(first, static_cast<std::uint32_t>(triangles.size()));
+    tree.depth = std::max(tree.depth, depth);
+    if (progress_) report(share);
+    return -static_cast<std::int32_t>(tree.leaves.size());
   }
 
-  std::int32_t buildNode(std::vector<std::uint32_t>& triangles, const Box& cell,
-                         std::uint32_t depth) {
+  // Adds a finished leaf's share of the mesh to the progress line, which
+  // changes when the whole percentage does.
+  void report(double share) {
+    const auto units = static_cast<std::uint64_t>(share * kProgressUnits);
+    const std::uint64_t done = done_.fetch_add(units) + units;
+    const int percent = static_cast<int>(std::min<std::uint64_t>(99, done * 100 / kProgressUnits));
+    int shown = shown_.load();
+    while (percent > shown)
+      if (shown_.compare_exchange_weak(shown, percent)) {
+        std::lock_guard lock(progressMutex_);
+        progress_(percent);
+        break;
+      }
+  }
+
+  std::int32_t buildNode(Lists& triangles, const Box& cell, std::uint32_t depth, double share,
+                         BspTree& tree, Scratch& scratch) {
     if (triangles.size() <= settings_.maxLeafTriangles || depth >= settings_.maxDepth)
-      return makeLeaf(triangles, depth);
-    const std::optional<Split> split = chooseSplit(triangles, cell);
-    if (!split) return makeLeaf(triangles, depth);
+      return makeLeaf(triangles, depth, share, tree);
+    const std::optional<Split> split = chooseSplit(triangles, cell, scratch, nullptr);
+    if (!split) return makeLeaf(triangles, depth, share, tree);
 
-    std::vector<std::uint32_t> front, back;
-    for (const std::uint32_t t : triangles) {
-      const Side side = classify(t, *split);
-      if (side & kFront) front.push_back(t);
-      if (side & kBack) back.push_back(t);
-    }
-    triangles.clear();
-    triangles.shrink_to_fit();
+    Lists front, back;
+    partition(triangles, *split, front, back, scratch.side);
+    const double whole = double(front.size() + back.size());
+    const double frontShare = share * double(front.size()) / whole;
+    const double backShare = share * double(back.size()) / whole;
 
-    const auto index = static_cast<std::int32_t>(tree_.nodes.size());
-    tree_.nodes.emplace_back();
-    const std::int32_t frontChild = buildNode(front, cell.clipped(*split, true), depth + 1);
-    const std::int32_t backChild = buildNode(back, cell.clipped(*split, false), depth + 1);
-    const bspf::schema::Plane plane(
-        bspf::schema::Vec3(split->normal.x(), split->normal.y(), split->normal.z()),
-        split->distance);
-    tree_.nodes[index] = bspf::schema::Node(plane, frontChild, backChild);
+    const auto index = static_cast<std::int32_t>(tree.nodes.size());
+    tree.nodes.emplace_back();
+    const std::int32_t frontChild =
+        buildNode(front, cell.clipped(*split, true), depth + 1, frontShare, tree, scratch);
+    const std::int32_t backChild =
+        buildNode(back, cell.clipped(*split, false), depth + 1, backShare, tree, scratch);
+    tree.nodes[std::size_t(index)] = bspf::schema::Node(toPlane(*split), frontChild, backChild);
     return index;
   }
 
+  static constexpr double kProgressUnits = 1e9;
+  // Triangles counted against all candidates at a time: their columns
+  // (21 doubles each) stay in the first-level cache.
+  static constexpr std::size_t kBlock = 256;
+
   const Mesh& mesh_;
   const TreeSettings& settings_;
-  const std::function<void(std::string_view)>& progress_;
+  const std::function<void(int)>& progress_;
+  bspf::ThreadPool* pool_;
   std::vector<Eigen::Vector3d> faceNormals_;
   std::vector<Eigen::Vector3d> centroids_;
-  BspTree tree_;
+  std::vector<Scratch> scratch_;
+  std::size_t shareSize_ = 0;
+  std::vector<TopNode> top_;
+  std::vector<Subtree> subtrees_;
+  std::atomic<std::uint64_t> done_{0};
+  std::atomic<int> shown_{-1};
+  std::mutex progressMutex_;
 };
 
 }  // namespace
 
 BspTree buildTree(const Mesh& mesh, const TreeSettings& settings,
-                  const std::function<void(std::string_view)>& progress) {
-  return TreeBuilder(mesh, settings, progress).build();
+                  const std::function<void(int)>& progress, bspf::ThreadPool* pool) {
+  return TreeBuilder(mesh, settings, progress, pool).build();
 }
 
 }  // namespace bspc

@@ -7,31 +7,46 @@
 #include <bspc/reach.h>
 #include <bspc/write.h>
 
+#include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <optional>
 #include <sstream>
 #include <system_error>
+#include <thread>
 
 namespace bspc {
 
 namespace {
 
-// Runs `stage`, adds its wall-clock seconds to `seconds`, returns its result.
+// Runs `stage`, adds its wall-clock seconds to `seconds` and the CPU seconds
+// of this process's threads (std::clock) to `cpuSeconds`, returns its result.
 template <typename Stage>
-auto timed(double& seconds, Stage&& stage) {
-  const auto start = std::chrono::steady_clock::now();
+auto timed(double& seconds, double& cpuSeconds, Stage&& stage) {
   struct Stop {
-    double& seconds;
-    std::chrono::steady_clock::time_point start;
+    double &seconds, &cpuSeconds;
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+    std::clock_t cpuStart = std::clock();
     ~Stop() {
       seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      cpuSeconds += double(std::clock() - cpuStart) / CLOCKS_PER_SEC;
     }
-  } stop{seconds, start};
+  } stop{seconds, cpuSeconds};
   return stage();
 }
 
-void say(const CompileSettings& settings, std::string_view line) {
-  if (settings.progress) settings.progress(line);
+// The progress line: how far the whole compile is and the stage it is in,
+// "47% build tree". Each stage owns a fixed span of the percentage, roughly
+// its share of a compile's time; the tree build moves through its span.
+void say(const CompileSettings& settings, int percent, std::string_view stage) {
+  if (settings.progress) settings.progress(std::to_string(percent) + "% " + std::string(stage));
+}
+constexpr int kTreeFirstPercent = 20, kTreeLastPercent = 90;
+
+// The threads of a compile: settings.threads, or every core.
+int threadCount(const CompileSettings& settings) {
+  if (settings.threads != 0) return static_cast<int>(settings.threads);
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
 // Fails when the blob would be larger than the limit: `bytes` is what it
@@ -55,34 +70,52 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
                        " MiB of memory (" + std::to_string(mesh.triangles.size()) +
                        " triangles), over the limit of " +
                        std::to_string(limits.maxMemoryBytes >> 20) + " MiB; split the level");
-  say(settings, "clean");
-  const Mesh clean =
-      timed(report.seconds.clean, [&] { return cleanMesh(mesh, settings.clean, report.clean); });
+  say(settings, 10, "clean");
+  const Mesh clean = timed(report.seconds.clean, report.cpuSeconds.clean,
+                           [&] { return cleanMesh(mesh, settings.clean, report.clean); });
   // Fail fast: the tree can only add to this.
   checkBlobBytes(minimumBlobBytes(clean.vertices.size(), clean.triangles.size()), true, clean,
                  limits);
   report.warnings = mesh.warnings;
-  for (std::string& warning : meshWarnings(clean)) report.warnings.push_back(std::move(warning));
-  say(settings, "drop faces no body can reach");
+  // The mesh checks count as cleaning.
+  std::vector<std::string> warnings =
+      timed(report.seconds.clean, report.cpuSeconds.clean, [&] { return meshWarnings(clean); });
+  for (std::string& warning : warnings) report.warnings.push_back(std::move(warning));
   // A copy only when the reach rule is on: the mesh can be most of the
   // compile's memory.
   Mesh dropped;
-  if (!settings.reach.from.empty())
-    dropped = timed(report.seconds.reach, [&] {
+  if (!settings.reach.from.empty()) {
+    say(settings, kTreeFirstPercent, "drop faces no body can reach");
+    dropped = timed(report.seconds.reach, report.cpuSeconds.reach, [&] {
       return dropUnreachableFaces(clean, settings.reach, report.reach, report.warnings);
     });
+  }
   const Mesh& reached = settings.reach.from.empty() ? clean : dropped;
-  say(settings, "build tree");
-  const BspTree tree = timed(report.seconds.buildTree,
-                             [&] { return buildTree(reached, settings.tree, settings.progress); });
+  say(settings, kTreeFirstPercent, "build tree");
+  std::function<void(int)> treeProgress;
+  int shown = kTreeFirstPercent;  // buildTree calls one at a time
+  if (settings.progress)
+    treeProgress = [&](int percent) {
+      const int overall =
+          kTreeFirstPercent + percent * (kTreeLastPercent - kTreeFirstPercent) / 100;
+      if (overall > shown) say(settings, shown = overall, "build tree");
+    };
+  // Workers only when there is more than one thread to run on.
+  std::optional<bspf::ThreadPool> pool;
+  if (threadCount(settings) > 1) pool.emplace(threadCount(settings));
+  bspf::ThreadPool* threads = pool ? &*pool : nullptr;
+  const BspTree tree = timed(report.seconds.buildTree, report.cpuSeconds.buildTree, [&] {
+    return buildTree(reached, settings.tree, treeProgress, threads);
+  });
   checkBlobBytes(
       estimateBlobBytes(reached.vertices.size(), reached.triangles.size(), tree.nodes.size(),
                         tree.leaves.size(), tree.leafTriangles.size()),
       true, reached, limits);
-  say(settings, "precompute planes");
-  const auto planes = timed(report.seconds.planes, [&] { return computeTrianglePlanes(reached); });
-  say(settings, "serialise");
-  std::vector<std::uint8_t> blob = timed(report.seconds.write, [&] {
+  say(settings, kTreeLastPercent, "precompute planes");
+  const auto planes = timed(report.seconds.planes, report.cpuSeconds.planes,
+                            [&] { return computeTrianglePlanes(reached, threads); });
+  say(settings, 95, "serialise");
+  std::vector<std::uint8_t> blob = timed(report.seconds.write, report.cpuSeconds.write, [&] {
     return serializeWorld(reached, planes, tree, {sourceName, settings, report.clean});
   });
 
@@ -125,7 +158,8 @@ bool sameFile(const std::filesystem::path& a, const std::filesystem::path& b) {
 }  // namespace
 
 CompileReport compileFile(const std::filesystem::path& input, const std::filesystem::path& output,
-                          const CompileSettings& settings, const std::filesystem::path& statsJson) {
+                          const CompileSettings& settings, const std::filesystem::path& statsJson,
+                          const std::filesystem::path& exportObj) {
   validate(settings);
   if (sameFile(input, output))
     throw CompileError(output.string() + ": the output would overwrite the input");
@@ -133,22 +167,40 @@ CompileReport compileFile(const std::filesystem::path& input, const std::filesys
     throw CompileError(statsJson.string() + ": the stats file would overwrite the input");
   if (!statsJson.empty() && sameFile(statsJson, output))
     throw CompileError(statsJson.string() + ": the stats file would overwrite the output");
+  if (!exportObj.empty()) {
+    if (sameFile(exportObj, input))
+      throw CompileError(exportObj.string() + ": the exported OBJ would overwrite the input");
+    if (sameFile(exportObj, output))
+      throw CompileError(exportObj.string() + ": the exported OBJ would overwrite the output");
+    if (!statsJson.empty() && sameFile(exportObj, statsJson))
+      throw CompileError(exportObj.string() + ": the exported OBJ would overwrite the stats file");
+  }
   // Both temporaries first: a path that cannot be written fails before the
   // compile, and an interrupted compile leaves files the signal handler
   // (removeTemporariesOnSignal) knows of. All outputs are kept, or none.
   PendingFile blobFile(output);
-  std::optional<PendingFile> statsFile;
+  std::optional<PendingFile> statsFile, objFile;
   if (!statsJson.empty()) statsFile.emplace(statsJson);
+  if (!exportObj.empty()) objFile.emplace(exportObj);
   CompileReport report;
   try {
-    say(settings, "import");
-    const Mesh mesh = timed(report.seconds.import, [&] {
+    say(settings, 0, "import");
+    const Mesh mesh = timed(report.seconds.import, report.cpuSeconds.import, [&] {
       return settings.import.contained ? importMeshContained(input, settings.import)
                                        : importMesh(input, settings.import);
     });
     const std::vector<std::uint8_t> blob =
         compileCleanStages(mesh, settings, input.filename().string(), report);
-    timed(report.seconds.write, [&] { blobFile.write(blob); });
+    timed(report.seconds.write, report.cpuSeconds.write, [&] {
+      blobFile.write(blob);
+      if (!objFile) return;
+      // The model as the runtime reads it: from the verified blob.
+      const bspf::OpenResult opened = bspf::viewWorld(std::as_bytes(std::span(blob)));
+      const std::string obj =
+          toObj(*opened.world,
+                "bspc " BSPF_VERSION ": the collision model of " + input.filename().string());
+      objFile->write({reinterpret_cast<const std::uint8_t*>(obj.data()), obj.size()});
+    });
   } catch (const CompileError& e) {
     const std::string what = e.what();
     if (what.rfind("cannot write ", 0) == 0) throw;  // already names the output
@@ -159,8 +211,10 @@ CompileReport compileFile(const std::filesystem::path& input, const std::filesys
     statsFile->write({reinterpret_cast<const std::uint8_t*>(json.data()), json.size()});
     statsFile->commit();
   }
-  // The blob last: a stats file that cannot be committed leaves no blob.
-  timed(report.seconds.write, [&] { blobFile.commit(); });
+  if (objFile) objFile->commit();
+  // The blob last: a stats file or OBJ that cannot be committed leaves no
+  // blob.
+  timed(report.seconds.write, report.cpuSeconds.write, [&] { blobFile.commit(); });
   return report;
 }
 
@@ -172,6 +226,10 @@ std::string toJson(const CompileReport& r) {
   out << "{\"seconds\":{\"import\":" << r.seconds.import << ",\"clean\":" << r.seconds.clean
       << ",\"build_tree\":" << r.seconds.buildTree << ",\"planes\":" << r.seconds.planes
       << ",\"reach\":" << r.seconds.reach << ",\"write\":" << r.seconds.write << "},"
+      << "\"cpu_seconds\":{\"import\":" << r.cpuSeconds.import
+      << ",\"clean\":" << r.cpuSeconds.clean << ",\"build_tree\":" << r.cpuSeconds.buildTree
+      << ",\"planes\":" << r.cpuSeconds.planes << ",\"reach\":" << r.cpuSeconds.reach
+      << ",\"write\":" << r.cpuSeconds.write << "},"
       << "\"clean\":{\"input_vertices\":" << r.clean.inputVertices
       << ",\"input_triangles\":" << r.clean.inputTriangles
       << ",\"welded_vertices\":" << r.clean.weldedVertices

@@ -14,28 +14,40 @@ bspf::schema::Plane toPlane(const Eigen::Vector3d& normal, const Eigen::Vector3d
                              static_cast<float>(nf.cast<double>().dot(through)));
 }
 
+bspf::schema::TrianglePlanes trianglePlanes(const Mesh& mesh,
+                                            const std::array<std::uint32_t, 3>& t) {
+  const Eigen::Vector3d p[3] = {mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]};
+  const Eigen::Vector3d face = (p[1] - p[0]).cross(p[2] - p[0]).normalized();
+  std::array<Eigen::Vector3d, 3> edgeNormal;
+  std::array<bspf::schema::Plane, 3> edges, caps;
+  for (int i = 0; i < 3; ++i) {
+    // face x edge points into a counter-clockwise triangle.
+    edgeNormal[i] = face.cross(p[(i + 1) % 3] - p[i]).normalized();
+    edges[i] = toPlane(edgeNormal[i], p[i]);
+  }
+  for (int i = 0; i < 3; ++i) {
+    // The edge opposite corner i runs from corner i+1 to corner i+2.
+    caps[i] = toPlane(-edgeNormal[(i + 1) % 3], p[i]);
+  }
+  return bspf::schema::TrianglePlanes(toPlane(face, (p[0] + p[1] + p[2]) / 3.0),
+                                      flatbuffers::span<const bspf::schema::Plane, 3>(edges),
+                                      flatbuffers::span<const bspf::schema::Plane, 3>(caps));
+}
+
 }  // namespace
 
-std::vector<bspf::schema::TrianglePlanes> computeTrianglePlanes(const Mesh& mesh) {
-  std::vector<bspf::schema::TrianglePlanes> out;
-  out.reserve(mesh.triangles.size());
-  for (const auto& t : mesh.triangles) {
-    const Eigen::Vector3d p[3] = {mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]};
-    const Eigen::Vector3d face = (p[1] - p[0]).cross(p[2] - p[0]).normalized();
-    std::array<Eigen::Vector3d, 3> edgeNormal;
-    std::array<bspf::schema::Plane, 3> edges, caps;
-    for (int i = 0; i < 3; ++i) {
-      // face x edge points into a counter-clockwise triangle.
-      edgeNormal[i] = face.cross(p[(i + 1) % 3] - p[i]).normalized();
-      edges[i] = toPlane(edgeNormal[i], p[i]);
-    }
-    for (int i = 0; i < 3; ++i) {
-      // The edge opposite corner i runs from corner i+1 to corner i+2.
-      caps[i] = toPlane(-edgeNormal[(i + 1) % 3], p[i]);
-    }
-    out.emplace_back(toPlane(face, (p[0] + p[1] + p[2]) / 3.0), flatbuffers::span<const bspf::schema::Plane, 3>(edges),
-                     flatbuffers::span<const bspf::schema::Plane, 3>(caps));
-  }
+std::vector<bspf::schema::TrianglePlanes> computeTrianglePlanes(const Mesh& mesh,
+                                                                bspf::ThreadPool* pool) {
+  std::vector<bspf::schema::TrianglePlanes> out(mesh.triangles.size());
+  const auto fill = [&](int, std::size_t first, std::size_t last) {
+    for (std::size_t i = first; i < last; ++i) out[i] = trianglePlanes(mesh, mesh.triangles[i]);
+  };
+  // Each triangle's planes land in its own slot: the same bytes on any
+  // number of threads. Chunks of 4,096 keep the hand-out cheap.
+  if (pool)
+    pool->parallelFor(out.size(), 4096, fill);
+  else
+    fill(0, 0, out.size());
   return out;
 }
 

@@ -68,6 +68,7 @@ void validate(const CompileSettings& s) {
           "reach cell must be 0.05 to 0.4 of the smaller radius");
   for (const Eigen::Vector3d& p : s.reach.from)
     require(p.allFinite(), "reach points must be finite");
+  require(s.threads <= 1024, "threads must be 0 (every core) to 1024");
 }
 
 std::string describeOptions(const CompileSettings& s) {

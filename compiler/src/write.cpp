@@ -2,6 +2,7 @@
 #include <bspc/write.h>
 #include <bspf/world.h>
 
+#include <charconv>
 #include <limits>
 
 // The output files (PendingFile) are POSIX: a Windows build of this library
@@ -90,6 +91,35 @@ std::vector<std::uint8_t> serializeWorld(const Mesh& mesh,
                       tree.root, tree.depth, fbb.CreateVectorOfStructs(leafBounds));
   fbb.FinishSizePrefixed(world, bspf::kFileIdentifier);
   return {fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()};
+}
+
+std::string toObj(const bspf::World& world, const std::string& header) {
+  std::string out = "# " + header + "\n";
+  out.reserve(out.size() + world.vertices().size() * 40 + world.triangles().size() * 30);
+  char text[64];
+  const auto number = [&](float value) {
+    // Shortest round trip: the float read back is this float.
+    const auto end = std::to_chars(text, text + sizeof text, value).ptr;
+    out.append(text, end);
+  };
+  for (const bspf::schema::Vec3& v : world.vertices()) {
+    out += "v ";
+    number(v.x());
+    out += ' ';
+    number(v.y());
+    out += ' ';
+    number(v.z());
+    out += '\n';
+  }
+  for (const bspf::schema::Triangle& t : world.triangles()) {
+    out += 'f';
+    for (const std::uint32_t v : {t.v0(), t.v1(), t.v2()}) {
+      out += ' ';
+      out.append(text, std::to_chars(text, text + sizeof text, std::uint64_t(v) + 1).ptr);
+    }
+    out += '\n';
+  }
+  return out;
 }
 
 std::uint64_t estimateBlobBytes(std::uint64_t vertices, std::uint64_t triangles,

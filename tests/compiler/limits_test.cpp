@@ -35,12 +35,15 @@ void writeGridObj(const fs::path& path, int n, double size) {
   REQUIRE(out);
 }
 
-// Compiles `input` with `settings`, recording the stages it reached; the
+// Compiles `input` with `settings`, recording the stages it reached (the
+// progress lines' stage names, "build tree" of "47% build tree"); the
 // error's text, empty when it succeeded.
 std::string compileError(const fs::path& input, const fs::path& output,
                          bspc::CompileSettings settings, std::vector<std::string>& stages) {
   settings.progress = [&](std::string_view line) {
-    if (line.find(':') == std::string_view::npos) stages.emplace_back(line);
+    const std::size_t space = line.find("% ");
+    REQUIRE(space != std::string_view::npos);
+    stages.emplace_back(line.substr(space + 2));
   };
   try {
     bspc::compileFile(input, output, settings);

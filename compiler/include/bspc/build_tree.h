@@ -5,6 +5,7 @@
 #include <bspc/mesh.h>
 #include <bspc/settings.h>
 #include <bspf/bspf_generated.h>
+#include <bspf/thread_pool.h>
 
 #include <cstddef>
 #include <cstdint>
@@ -36,9 +37,15 @@ inline constexpr std::size_t kDenseNodeTriangles = 64;
 /// TreeSettings) until a node is small or deep enough. Triangles are never
 /// split: one that straddles a plane is listed on both sides, so each leaf
 /// lists every triangle that overlaps its cell; a triangle lying in the plane
-/// goes to the side its normal faces. Deterministic.
+/// goes to the side its normal faces. Deterministic: the same tree, to the
+/// bit, whatever `pool` (null: this thread only) and its thread count.
+/// `progress`, when set, is called with a percentage, 0 to 99, each time it
+/// grows (the share of the triangles that reached a leaf, each node's share
+/// divided between its children in proportion to their lists), from any of
+/// the pool's threads, one call at a time.
 /// Precondition: a cleaned mesh (cleanMesh) with at least one triangle.
 BspTree buildTree(const Mesh& mesh, const TreeSettings& settings,
-                  const std::function<void(std::string_view)>& progress = {});
+                  const std::function<void(int percent)>& progress = {},
+                  bspf::ThreadPool* pool = nullptr);
 
 }  // namespace bspc

@@ -24,6 +24,9 @@ struct CompileReport {
   CleanReport clean;
   ReachReport reach;
   StageTimes seconds;
+  /// CPU seconds per stage, all of this process's threads together (the
+  /// contained import's child is not counted: its time is the wait).
+  StageTimes cpuSeconds;
   std::uint64_t outputBytes = 0;
   /// Figures of the tree as the runtime sees it (the blob is verified).
   bspf::TreeStats tree;
@@ -37,24 +40,27 @@ struct CompileReport {
 /// import, clean, drop faces no body can reach (settings.reach, when it
 /// names points), build tree, precompute planes, write: `input` (any format
 /// assimp reads, a regular file) to the blob at `output`, and, when
-/// `statsJson` is not empty, the report as JSON (toJson) to that file. Both
-/// outputs are written through PendingFile (write.h): their temporaries are
-/// made before the import, and both are kept or neither (the stats file is
-/// renamed into place first, the blob last). Throws CompileError with a
+/// `statsJson` is not empty, the report as JSON (toJson) to that file, and,
+/// when `exportObj` is not empty, the compiled model as an OBJ (toObj) to
+/// that one. All outputs are written through PendingFile (write.h): their
+/// temporaries are made before the import, and all are kept or none (the
+/// stats file and the OBJ are renamed into place first, the blob last). No
+/// two of the paths may name the same file. Throws CompileError with a
 /// one-line message naming the file at fault (an output that is not a
 /// regular file, a stats path naming the input or the output, ...); the
 /// outputs are then left as they were. POSIX only: not in a Windows build of
 /// the library (tests/windows), which has compileMesh.
 CompileReport compileFile(const std::filesystem::path& input, const std::filesystem::path& output,
                           const CompileSettings& settings,
-                          const std::filesystem::path& statsJson = {});
+                          const std::filesystem::path& statsJson = {},
+                          const std::filesystem::path& exportObj = {});
 
 /// The same stages on a mesh in memory (metres, Y up), returning the blob.
 /// `sourceName` is recorded as the source file name.
 std::vector<std::uint8_t> compileMesh(const Mesh& mesh, const CompileSettings& settings,
                                       const std::string& sourceName, CompileReport& report);
 
-/// The report as one JSON object (stage times, clean counts, tree figures,
+/// The report as one JSON object (stage wall and CPU times, clean counts, tree figures,
 /// output size).
 std::string toJson(const CompileReport& report);
 

@@ -4,6 +4,7 @@
 
 #include <bspc/mesh.h>
 #include <bspf/bspf_generated.h>
+#include <bspf/thread_pool.h>
 
 #include <vector>
 
@@ -13,7 +14,10 @@ namespace bspc {
 /// edge and the face normal, facing into the triangle; three vertex caps, each
 /// through a corner, parallel to the opposite edge, facing into the triangle
 /// (the article's figures 9 to 11). Computed in double, stored as float.
+/// With a pool, the triangles are shared between its threads; the result is
+/// the same to the bit on any number of threads (null: this thread only).
 /// Precondition: a cleaned mesh (no zero-area triangles).
-std::vector<bspf::schema::TrianglePlanes> computeTrianglePlanes(const Mesh& mesh);
+std::vector<bspf::schema::TrianglePlanes> computeTrianglePlanes(const Mesh& mesh,
+                                                                bspf::ThreadPool* pool = nullptr);
 
 }  // namespace bspc

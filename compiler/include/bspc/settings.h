@@ -150,8 +150,15 @@ struct CompileSettings {
   TreeSettings tree;
   LimitSettings limits;
   ReachSettings reach;
-  /// Called with a one-line status now and then during long stages; may be
-  /// empty. bspc prints it on stderr when that is a terminal.
+  /// Threads the tree build and the plane precompute run on; 0, the default,
+  /// takes every core (std::thread::hardware_concurrency). 0 to 1024. Only
+  /// the speed depends on it: the blob is the same, byte for byte, for any
+  /// count, so it is not recorded in the blob's options.
+  unsigned threads = 0;
+  /// Called with a one-line status, a stage's name and how far it is
+  /// ("build tree 42%"), as the compile goes on; may be empty. From the
+  /// compiling thread or the tree build's, one call at a time. bspc prints
+  /// it on stderr when that is a terminal.
   std::function<void(std::string_view)> progress;
 };
 

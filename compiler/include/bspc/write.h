@@ -6,6 +6,7 @@
 #include <bspc/clean.h>
 #include <bspc/mesh.h>
 #include <bspc/settings.h>
+#include <bspf/world.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -39,6 +40,15 @@ std::uint64_t estimateBlobBytes(std::uint64_t vertices, std::uint64_t triangles,
 inline std::uint64_t minimumBlobBytes(std::uint64_t vertices, std::uint64_t triangles) {
   return estimateBlobBytes(vertices, triangles, 0, 1, triangles);
 }
+
+/// The collision model a blob holds, as the runtime reads it (its float
+/// vertices and its triangles, in their order and winding), as a Wavefront
+/// OBJ: "# " and `header` on the first line, then one "v x y z" a vertex
+/// (metres, Y up, each float written with the fewest digits that read back
+/// as the same float) and one "f a b c" a triangle (1-based, counter-
+/// clockwise seen from the side the triangle faces). Any modelling tool
+/// opens it; bspc imports it again to the same triangles.
+std::string toObj(const bspf::World& world, const std::string& header);
 
 /// An output file being written: bytes go to a temporary file beside `path`
 /// (".NAME.tmp-" and 12 random characters, created with O_EXCL and
