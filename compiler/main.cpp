@@ -77,6 +77,10 @@ int main(int argc, char** argv) {
   app.add_option("--triangle-candidates", settings.tree.triangleCandidates,
                  "Triangle-plane candidates per node")
       ->capture_default_str();
+  bool keepCovered = false;
+  app.add_flag("--keep-covered-faces", keepCovered,
+               "Keep the faces lying against an opposite face of another solid (no body can "
+               "touch them; dropped by default)");
   app.add_option("--stats-json", statsJson, "Also write the compile report as JSON to this file");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors");
 
@@ -88,6 +92,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (!infoPath.empty()) return runInfo(infoPath);
+  settings.dropCoveredFaces = !keepCovered;
   if (input.empty() || output.empty()) {
     std::cerr << "bspc: error: need an input mesh and -o OUTPUT.bspf (see bspc --help)\n";
     return 2;
