@@ -158,17 +158,22 @@ std::vector<bool> solidBehind(const Geometry& g, const EdgeMap& edges) {
       }
     }
   }
-  for (bool changed = true; changed;) {
-    changed = false;
-    for (std::uint32_t t = 0; t < n; ++t) {
-      if (!backed[t]) continue;
-      for (const std::uint32_t u : dependsOn[t])
-        if (!backed[u]) {
-          backed[t] = false;
-          changed = true;
-          break;
-        }
-    }
+  // Unbacked triangles unback those that rely on them, through the chain
+  // (a worklist: linear however long the chains of coplanar triangles).
+  std::vector<std::vector<std::uint32_t>> reliedOnBy(n);
+  for (std::uint32_t t = 0; t < n; ++t)
+    for (const std::uint32_t u : dependsOn[t]) reliedOnBy[u].push_back(t);
+  std::vector<std::uint32_t> pending;
+  for (std::uint32_t t = 0; t < n; ++t)
+    if (!backed[t]) pending.push_back(t);
+  while (!pending.empty()) {
+    const std::uint32_t u = pending.back();
+    pending.pop_back();
+    for (const std::uint32_t t : reliedOnBy[u])
+      if (backed[t]) {
+        backed[t] = false;
+        pending.push_back(t);
+      }
   }
   return backed;
 }
@@ -302,7 +307,10 @@ Mesh dropCoveredFaces(const Mesh& mesh, EdgeReport& report) {
               if (inPlane) cover.push_back(c);
             }
           }
-    if (cover.empty()) continue;
+    // Many overlapping faces in one plane (hostile input): keep the face
+    // rather than clip it against them all.
+    constexpr std::size_t kMaxCover = 64;
+    if (cover.empty() || cover.size() > kMaxCover) continue;
     std::sort(cover.begin(), cover.end());
     drop[f] = covered(g, f, cover);
   }
