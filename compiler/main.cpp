@@ -141,6 +141,10 @@ int main(int argc, char** argv) {
       ->type_name("MIB")
       ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1} << 40))
       ->capture_default_str();
+  bool keepCovered = false;
+  app.add_flag("--keep-covered-faces", keepCovered,
+               "Keep the faces lying against an opposite face of another solid (no body can "
+               "touch them; dropped by default)");
   app.add_option("--stats-json", statsJson, "Also write the compile report as JSON to this file")
       ->type_name("FILE");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors and warnings");
@@ -185,6 +189,7 @@ command line (the error names the option).)");
   settings.tree.candidates = candidateKinds.at(candidatesLower);
   settings.import.memoryLimitBytes = importMemoryMiB << 20;
   if (!infoPath.empty()) return runInfo(infoPath);
+  settings.dropCoveredFaces = !keepCovered;
   if (input.empty() || output.empty()) {
     std::cerr << "bspc: error: need an input mesh and -o OUTPUT.bspf (see bspc --help)\n";
     return 2;

@@ -55,13 +55,19 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
                        " triangles), over the limit of " +
                        std::to_string(limits.maxMemoryBytes >> 20) + " MiB; split the level");
   say(settings, "clean");
-  const Mesh clean =
+  const Mesh cleaned =
       timed(report.seconds.clean, [&] { return cleanMesh(mesh, settings.clean, report.clean); });
+  report.warnings = mesh.warnings;
+  for (std::string& warning : meshWarnings(cleaned)) report.warnings.push_back(std::move(warning));
+  say(settings, "drop covered faces");
+  const Mesh clean = timed(report.seconds.edges, [&] {
+    return settings.dropCoveredFaces ? dropCoveredFaces(cleaned, report.edges) : cleaned;
+  });
+  if (clean.triangles.empty())
+    throw CompileError("no triangle is left: every face lies against an opposite face");
   // Fail fast: the tree can only add to this.
   checkBlobBytes(minimumBlobBytes(clean.vertices.size(), clean.triangles.size()), true, clean,
                  limits);
-  report.warnings = mesh.warnings;
-  for (std::string& warning : meshWarnings(clean)) report.warnings.push_back(std::move(warning));
   say(settings, "build tree");
   const BspTree tree = timed(report.seconds.buildTree,
                              [&] { return buildTree(clean, settings.tree, settings.progress); });
@@ -69,7 +75,9 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
                                    tree.leaves.size(), tree.leafTriangles.size()),
                  true, clean, limits);
   say(settings, "precompute planes");
-  const auto planes = timed(report.seconds.planes, [&] { return computeTrianglePlanes(clean); });
+  const auto planes = timed(report.seconds.planes, [&] {
+    return computeTrianglePlanes(clean, meetablePlanes(classifyEdges(clean), report.edges));
+  });
   say(settings, "serialise");
   std::vector<std::uint8_t> blob = timed(report.seconds.write, [&] {
     return serializeWorld(clean, planes, tree, {sourceName, settings, report.clean});
@@ -159,8 +167,8 @@ std::string toJson(const CompileReport& r) {
   std::ostringstream out;
   out.precision(6);
   out << "{\"seconds\":{\"import\":" << r.seconds.import << ",\"clean\":" << r.seconds.clean
-      << ",\"build_tree\":" << r.seconds.buildTree << ",\"planes\":" << r.seconds.planes
-      << ",\"write\":" << r.seconds.write << "},"
+      << ",\"edges\":" << r.seconds.edges << ",\"build_tree\":" << r.seconds.buildTree
+      << ",\"planes\":" << r.seconds.planes << ",\"write\":" << r.seconds.write << "},"
       << "\"clean\":{\"input_vertices\":" << r.clean.inputVertices
       << ",\"input_triangles\":" << r.clean.inputTriangles
       << ",\"welded_vertices\":" << r.clean.weldedVertices
@@ -169,6 +177,10 @@ std::string toJson(const CompileReport& r) {
       << ",\"dropped_duplicate\":" << r.clean.droppedDuplicate
       << ",\"output_vertices\":" << r.clean.outputVertices
       << ",\"output_triangles\":" << r.clean.outputTriangles << "},"
+      << "\"edges\":{\"dropped_covered\":" << r.edges.droppedCovered << ",\"open\":" << r.edges.open
+      << ",\"convex\":" << r.edges.convex << ",\"concave\":" << r.edges.concave
+      << ",\"coplanar\":" << r.edges.coplanar
+      << ",\"skipped_edge_planes\":" << r.edges.skippedEdgePlanes << "},"
       << "\"tree\":{\"nodes\":" << r.tree.nodes << ",\"leaves\":" << r.tree.leaves
       << ",\"empty_leaves\":" << r.tree.emptyLeaves << ",\"depth_max\":" << r.tree.depthMax
       << ",\"depth_mean\":" << r.tree.depthMean

@@ -16,10 +16,12 @@ bspf::schema::Plane toPlane(const Eigen::Vector3d& normal, const Eigen::Vector3d
 
 }  // namespace
 
-std::vector<bspf::schema::TrianglePlanes> computeTrianglePlanes(const Mesh& mesh) {
+std::vector<bspf::schema::TrianglePlanes> computeTrianglePlanes(
+    const Mesh& mesh, std::span<const std::uint8_t> meetable) {
   std::vector<bspf::schema::TrianglePlanes> out;
   out.reserve(mesh.triangles.size());
-  for (const auto& t : mesh.triangles) {
+  for (std::size_t index = 0; index < mesh.triangles.size(); ++index) {
+    const auto& t = mesh.triangles[index];
     const Eigen::Vector3d p[3] = {mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]};
     const Eigen::Vector3d face = (p[1] - p[0]).cross(p[2] - p[0]).normalized();
     std::array<Eigen::Vector3d, 3> edgeNormal;
@@ -33,8 +35,10 @@ std::vector<bspf::schema::TrianglePlanes> computeTrianglePlanes(const Mesh& mesh
       // The edge opposite corner i runs from corner i+1 to corner i+2.
       caps[i] = toPlane(-edgeNormal[(i + 1) % 3], p[i]);
     }
-    out.emplace_back(toPlane(face, (p[0] + p[1] + p[2]) / 3.0), flatbuffers::span<const bspf::schema::Plane, 3>(edges),
-                     flatbuffers::span<const bspf::schema::Plane, 3>(caps));
+    out.emplace_back(toPlane(face, (p[0] + p[1] + p[2]) / 3.0),
+                     flatbuffers::span<const bspf::schema::Plane, 3>(edges),
+                     flatbuffers::span<const bspf::schema::Plane, 3>(caps),
+                     meetable.empty() ? kAllPlanesMeetable : meetable[index]);
   }
   return out;
 }

@@ -69,7 +69,8 @@ std::string describeOptions(const CompileSettings& s) {
       << " balance-weight=" << s.tree.balanceWeight << " split-weight=" << s.tree.splitWeight
       << " query-reach=" << s.tree.queryReach << " candidates=" << toString(s.tree.candidates)
       << " axis-candidates=" << s.tree.axisCandidatesPerAxis
-      << " triangle-candidates=" << s.tree.triangleCandidates;
+      << " triangle-candidates=" << s.tree.triangleCandidates
+      << " drop-covered-faces=" << (s.dropCoveredFaces ? 1 : 0);
   return out.str();
 }
 

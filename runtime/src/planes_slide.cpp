@@ -138,7 +138,18 @@ void growPlanes(const World& world, std::uint32_t triangle, EllipsoidRadii radii
     grow(*planes.edges()->Get(k), 2 * k);
     grow(*planes.caps()->Get(k), 2 * k + 1);
   }
-  for (int k = 6; k < 8; ++k) grown.set(k, Vec3::Zero(), -std::numeric_limits<float>::infinity());
+  // A plane the blob marks as never met (TrianglePlanes::meetable) always
+  // holds, like lanes 6 and 7: the face blocks beyond it too. bspc keeps
+  // every plane (docs/algorithm.md), so this is one test per triangle.
+  constexpr float kAlways = -std::numeric_limits<float>::infinity();
+  constexpr unsigned kAllMeetable = 0b111111;
+  if (const unsigned meetable = planes.meetable(); meetable != kAllMeetable) [[unlikely]] {
+    for (int k = 0; k < 6; ++k) {
+      const unsigned bit = k % 2 == 0 ? 1u << (k / 2) : 8u << (k / 2);
+      if (!(meetable & bit)) grown.set(k, Vec3::Zero(), kAlways);
+    }
+  }
+  for (int k = 6; k < 8; ++k) grown.set(k, Vec3::Zero(), kAlways);
   grown.ready = true;
 }
 

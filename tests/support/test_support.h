@@ -63,8 +63,8 @@ std::vector<std::uint8_t> compile(const bspc::Mesh& mesh,
 struct CompiledMesh {
   AlignedBytes bytes;
   bspf::World world;
-  explicit CompiledMesh(const bspc::Mesh& mesh)
-      : bytes(compile(mesh)), world(*bspf::viewWorld(bytes.span()).world) {}
+  explicit CompiledMesh(const bspc::Mesh& mesh, const bspc::CompileSettings& settings = {})
+      : bytes(compile(mesh, settings)), world(*bspf::viewWorld(bytes.span()).world) {}
 };
 
 /// Compiles samples/NAME.obj with default settings into a temp directory

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <bspc/clean.h>
+#include <bspc/edges.h>
 #include <bspc/mesh.h>
 #include <bspc/settings.h>
 #include <bspf/world.h>
@@ -16,11 +17,13 @@ namespace bspc {
 
 /// Wall-clock seconds per stage.
 struct StageTimes {
-  double import = 0, clean = 0, buildTree = 0, planes = 0, write = 0;
+  double import = 0, clean = 0, edges = 0, buildTree = 0, planes = 0, write = 0;
 };
 
 struct CompileReport {
   CleanReport clean;
+  /// Covered faces dropped, edges by kind, edge planes skipped.
+  EdgeReport edges;
   StageTimes seconds;
   std::uint64_t outputBytes = 0;
   /// Figures of the tree as the runtime sees it (the blob is verified).
@@ -32,7 +35,8 @@ struct CompileReport {
   std::vector<std::string> warnings;
 };
 
-/// import, clean, build tree, precompute planes, write: `input` (any format
+/// import, clean, drop covered faces, build tree, classify edges and
+/// precompute planes, write: `input` (any format
 /// assimp reads, a regular file) to the blob at `output`, and, when
 /// `statsJson` is not empty, the report as JSON (toJson) to that file. Both
 /// outputs are written through PendingFile (write.h): their temporaries are

@@ -5,6 +5,8 @@
 #include <bspc/mesh.h>
 #include <bspf/bspf_generated.h>
 
+#include <cstdint>
+#include <span>
 #include <vector>
 
 namespace bspc {
@@ -13,7 +15,14 @@ namespace bspc {
 /// edge and the face normal, facing into the triangle; three vertex caps, each
 /// through a corner, parallel to the opposite edge, facing into the triangle
 /// (the article's figures 9 to 11). Computed in double, stored as float.
-/// Precondition: a cleaned mesh (no zero-area triangles).
-std::vector<bspf::schema::TrianglePlanes> computeTrianglePlanes(const Mesh& mesh);
+/// `meetable`: each triangle's meetable-plane bits (meetablePlanes,
+/// bspc/edges.h), or empty for every plane meetable. Precondition: a cleaned
+/// mesh (no zero-area triangles); `meetable` empty or parallel to its
+/// triangles.
+std::vector<bspf::schema::TrianglePlanes> computeTrianglePlanes(
+    const Mesh& mesh, std::span<const std::uint8_t> meetable = {});
+
+/// The meetable bits of a triangle whose planes are all met.
+inline constexpr std::uint8_t kAllPlanesMeetable = 0b111111;
 
 }  // namespace bspc

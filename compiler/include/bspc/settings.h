@@ -121,6 +121,11 @@ struct CompileSettings {
   CleanSettings clean;
   TreeSettings tree;
   LimitSettings limits;
+  /// Drop the faces lying against an opposite face of another solid
+  /// (dropCoveredFaces, bspc/edges.h). Off (`--keep-covered-faces`): every
+  /// cleaned face is kept, and a level of closed solids stays a union of
+  /// closed meshes (what a winding-number inside test needs).
+  bool dropCoveredFaces = true;
   /// Called with a one-line status now and then during long stages; may be
   /// empty. bspc prints it on stderr when that is a terminal.
   std::function<void(std::string_view)> progress;
