@@ -105,8 +105,8 @@ inline constexpr std::uint64_t kPeakBytesPerTriangle = 750;
 struct LimitSettings {
   /// Largest blob to write, bytes: 1 to kMaxBlobBytes (the default). Checked
   /// right after clean against the bytes every triangle and vertex takes in
-  /// a blob whatever the tree (minimumBlobBytes in write.h: about 152 a
-  /// triangle plus 12 a vertex, so about 14 million triangles at most),
+  /// a blob whatever the tree (minimumBlobBytes in write.h: about 156 a
+  /// triangle plus 12 a vertex, so about 13.7 million triangles at most),
   /// again once the tree is built, and on the blob itself.
   std::uint64_t maxBlobBytes = kMaxBlobBytes;
   /// Largest peak memory the compile may take, bytes; 0, the default, sets
