@@ -40,9 +40,6 @@ const std::map<std::pair<std::string, CollisionMethod>, DocumentedFailure>& docu
       // "bumps a body 0.67 m off its line"
       {{"outer corners and edges passed closely (ghost collisions)", CollisionMethod::Planes},
        {{{0, "deviation from the open-floor run, m", 0.70, true}}, 0, 5, 0.005}},
-      // "stops at the lip and keeps 30% of its flat-floor path"
-      {{"a 1 cm lip between abutting floor slabs, walked over", CollisionMethod::Planes},
-       {{{0, "fraction of the flat-floor path kept", 0.28, false}}, 0, 85, 0.36}},
       // "climbs 0.00 m": the figure cannot drop; frames stuck can grow
       {{"stairs, 0.15 m risers", CollisionMethod::Planes}, {{}, 0, 165, 0.005}},
       {{"stairs, 0.30 m risers", CollisionMethod::Planes}, {{}, 0, 165, 0.005}},

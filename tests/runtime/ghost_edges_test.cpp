@@ -125,3 +125,65 @@ TEST_CASE("the planes method treats a plane the blob marks unmeetable as always 
   CHECK(compiled.world.trianglePlanes()[0].meetable() == 0b111111);
   CHECK_FALSE(grown.inside(Vec3(0.8f, 0.1f, 0.2f)));
 }
+
+TEST_CASE("a body walks over a 1 cm lip as over a flat floor", "[runtime][movement]") {
+  const auto method = GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO(nameOf(method));
+  // Two abutting slabs, the far one 1 cm higher: the lip face's top edge is
+  // convex, and its squared-off plane held a planes body standing on the
+  // lower slab (centre 0.851 m up, under 0.01 + 0.85 m).
+  bspc::Mesh slabs = bspf::test::boxMesh({-10, -1, -5}, {0, 0, 5});
+  bspf::test::append(slabs, bspf::test::boxMesh({0, -1, -5}, {10, 0.01, 5}));
+  const bspf::test::CompiledMesh lip(slabs);
+  const bspf::test::CompiledMesh plain(bspf::test::boxMesh({-10, -1, -5}, {10, 0, 5}));
+  for (const Vec3& force : {Vec3(60, 0, 0), Vec3(Vec3(1, 0, 0.577f).normalized() * 60)}) {
+    Body over = walker({-3, 0.851f, -1}, method), reference = over;
+    CHECK(walk(lip.world, over, force, 90) == 0);
+    walk(plain.world, reference, force, 90);
+    // Its path along x, against the one on a flat floor.
+    CHECK(over.position.x() > 1);  // crossed the lip at x = 0
+    CHECK(over.position.x() + 3 > 0.95f * (reference.position.x() + 3));
+    CHECK(over.position.y() > 0.01f + 0.85f);  // on the upper slab
+  }
+}
+
+TEST_CASE("a body crosses a floor gap narrower than itself without refused moves",
+          "[runtime][movement]") {
+  const auto method = GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO(nameOf(method));
+  // Two floor blocks 0.75 m apart (the body is 0.9 m wide): the gap's side
+  // faces have convex top edges whose squared planes pushed a planes body
+  // standing over the gap back and forth until its moves were refused.
+  bspc::Mesh floor = bspf::test::boxMesh({-10, -1, -5}, {0, 0, 5});
+  bspf::test::append(floor, bspf::test::boxMesh({0.75, -1, -5}, {10, 0, 5}));
+  const bspf::test::CompiledMesh gap(floor);
+  for (const Vec3& force : {Vec3(60, 0, 0), Vec3(Vec3(1, 0, 0.577f).normalized() * 60),
+                            Vec3(Vec3(0.2f, 0, 1).normalized() * 60)}) {
+    Body body = walker({-1, 0.851f, -2}, method);
+    CHECK(walk(gap.world, body, force, 60) == 0);
+    CHECK(body.position.y() > 0.3f);  // held by the edges (the exact sweep dips 0.38 m)
+  }
+  // Walking across it.
+  Body across = walker({-3, 0.851f, 0}, method);
+  CHECK(walk(gap.world, across, Vec3(60, 0, 0), 90) == 0);
+  CHECK(across.position.x() > 2);
+}
+
+TEST_CASE("a riser higher than a rounded body rides stays a wall for the planes method",
+          "[runtime][movement]") {
+  const auto method = GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO(nameOf(method));
+  // Steps of 0.15 m and 0.6 m: the body's rounded bottom meets their top
+  // edges steep (it rides only edges under about 0.10 m), so neither method
+  // climbs them without step-up (MovementSettings::maxStepHeight).
+  for (const double riser : {0.15, 0.6}) {
+    INFO("riser " << riser);
+    bspc::Mesh steps = bspf::test::boxMesh({-10, -1, -5}, {0, 0, 5});
+    bspf::test::append(steps, bspf::test::boxMesh({0, -1, -5}, {10, riser, 5}));
+    const bspf::test::CompiledMesh level(steps);
+    Body body = walker({-3, 0.851f, 0}, method);
+    walk(level.world, body, Vec3(60, 0, 0), 90);
+    CHECK(body.position.x() < 0);  // before the riser
+    CHECK(body.position.y() < 0.9f);
+  }
+}
