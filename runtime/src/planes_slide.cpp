@@ -190,9 +190,15 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
                                          walkableNormalY);
     if (!hit.found()) return result;
     if (iteration == settings.maxIterations) {
-      result.refused = true;
-      result.end = start;
-      return result;
+      // The six planes found no place for the end (a body held between
+      // squared-off edges that push it back and forth): the exact sweep,
+      // whose rounded contacts have no such traps, makes the move from the
+      // same start instead (docs/algorithm.md, "Ghost edges"); it refuses
+      // only what it cannot place either.
+      SlideResult exact =
+          slideExact(world, start, desiredEnd, radii, settings, walkableNormalY, scratch);
+      exact.iterations += result.iterations;
+      return exact;
     }
     const Vec3& normal = hit.normal;
     const bool walkable = normal.y() >= walkableNormalY;
