@@ -159,6 +159,10 @@ int main(int argc, char** argv) {
                  "for any count")
       ->type_name("N")
       ->capture_default_str();
+  bool keepCovered = false;
+  app.add_flag("--keep-covered-faces", keepCovered,
+               "Keep the faces lying against an opposite face of another solid (no body can "
+               "touch them; dropped by default)");
   app.add_option("--stats-json", statsJson, "Also write the compile report as JSON to this file")
       ->type_name("FILE");
   app.add_option("--export-obj", exportObj,
@@ -215,6 +219,7 @@ command line (the error names the option).)");
     settings.reach.radiusY = bodyRadii[1];
   }
   if (!infoPath.empty()) return runInfo(infoPath);
+  settings.dropCoveredFaces = !keepCovered;
   if (input.empty() || output.empty()) {
     std::cerr << "bspc: error: need an input mesh and -o OUTPUT.bspf (see bspc --help)\n";
     return 2;

@@ -71,16 +71,23 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
                        " triangles), over the limit of " +
                        std::to_string(limits.maxMemoryBytes >> 20) + " MiB; split the level");
   say(settings, 10, "clean");
-  const Mesh clean = timed(report.seconds.clean, report.cpuSeconds.clean,
-                           [&] { return cleanMesh(mesh, settings.clean, report.clean); });
+  const Mesh cleaned = timed(report.seconds.clean, report.cpuSeconds.clean,
+                             [&] { return cleanMesh(mesh, settings.clean, report.clean); });
+  report.warnings = mesh.warnings;
+  // The mesh checks count as cleaning; they need the closed pieces the next
+  // stage opens.
+  std::vector<std::string> warnings =
+      timed(report.seconds.clean, report.cpuSeconds.clean, [&] { return meshWarnings(cleaned); });
+  for (std::string& warning : warnings) report.warnings.push_back(std::move(warning));
+  say(settings, kTreeFirstPercent, "drop covered faces");
+  const Mesh clean = timed(report.seconds.edges, report.cpuSeconds.edges, [&] {
+    return settings.dropCoveredFaces ? dropCoveredFaces(cleaned, report.edges) : cleaned;
+  });
+  if (clean.triangles.empty())
+    throw CompileError("no triangle is left: every face lies against an opposite face");
   // Fail fast: the tree can only add to this.
   checkBlobBytes(minimumBlobBytes(clean.vertices.size(), clean.triangles.size()), true, clean,
                  limits);
-  report.warnings = mesh.warnings;
-  // The mesh checks count as cleaning.
-  std::vector<std::string> warnings =
-      timed(report.seconds.clean, report.cpuSeconds.clean, [&] { return meshWarnings(clean); });
-  for (std::string& warning : warnings) report.warnings.push_back(std::move(warning));
   // A copy only when the reach rule is on: the mesh can be most of the
   // compile's memory.
   Mesh dropped;
@@ -112,8 +119,10 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
                         tree.leaves.size(), tree.leafTriangles.size()),
       true, reached, limits);
   say(settings, kTreeLastPercent, "precompute planes");
-  const auto planes = timed(report.seconds.planes, report.cpuSeconds.planes,
-                            [&] { return computeTrianglePlanes(reached, threads); });
+  const auto planes = timed(report.seconds.planes, report.cpuSeconds.planes, [&] {
+    return computeTrianglePlanes(reached, meetablePlanes(classifyEdges(reached), report.edges),
+                                 threads);
+  });
   say(settings, 95, "serialise");
   std::vector<std::uint8_t> blob = timed(report.seconds.write, report.cpuSeconds.write, [&] {
     return serializeWorld(reached, planes, tree, {sourceName, settings, report.clean});
@@ -224,12 +233,13 @@ std::string toJson(const CompileReport& r) {
   std::ostringstream out;
   out.precision(6);
   out << "{\"seconds\":{\"import\":" << r.seconds.import << ",\"clean\":" << r.seconds.clean
-      << ",\"build_tree\":" << r.seconds.buildTree << ",\"planes\":" << r.seconds.planes
-      << ",\"reach\":" << r.seconds.reach << ",\"write\":" << r.seconds.write << "},"
+      << ",\"edges\":" << r.seconds.edges << ",\"build_tree\":" << r.seconds.buildTree
+      << ",\"planes\":" << r.seconds.planes << ",\"reach\":" << r.seconds.reach
+      << ",\"write\":" << r.seconds.write << "},"
       << "\"cpu_seconds\":{\"import\":" << r.cpuSeconds.import
-      << ",\"clean\":" << r.cpuSeconds.clean << ",\"build_tree\":" << r.cpuSeconds.buildTree
-      << ",\"planes\":" << r.cpuSeconds.planes << ",\"reach\":" << r.cpuSeconds.reach
-      << ",\"write\":" << r.cpuSeconds.write << "},"
+      << ",\"clean\":" << r.cpuSeconds.clean << ",\"edges\":" << r.cpuSeconds.edges
+      << ",\"build_tree\":" << r.cpuSeconds.buildTree << ",\"planes\":" << r.cpuSeconds.planes
+      << ",\"reach\":" << r.cpuSeconds.reach << ",\"write\":" << r.cpuSeconds.write << "},"
       << "\"clean\":{\"input_vertices\":" << r.clean.inputVertices
       << ",\"input_triangles\":" << r.clean.inputTriangles
       << ",\"welded_vertices\":" << r.clean.weldedVertices
@@ -238,6 +248,10 @@ std::string toJson(const CompileReport& r) {
       << ",\"dropped_duplicate\":" << r.clean.droppedDuplicate
       << ",\"output_vertices\":" << r.clean.outputVertices
       << ",\"output_triangles\":" << r.clean.outputTriangles << "},"
+      << "\"edges\":{\"dropped_covered\":" << r.edges.droppedCovered << ",\"open\":" << r.edges.open
+      << ",\"convex\":" << r.edges.convex << ",\"concave\":" << r.edges.concave
+      << ",\"coplanar\":" << r.edges.coplanar
+      << ",\"skipped_edge_planes\":" << r.edges.skippedEdgePlanes << "},"
       << "\"reach\":{\"applied\":" << (r.reach.applied ? "true" : "false")
       << ",\"dropped\":" << r.reach.dropped << ",\"cells\":" << r.reach.cells
       << ",\"reached_cells\":" << r.reach.reached << ",\"cell_metres\":" << r.reach.cellMetres

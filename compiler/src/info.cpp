@@ -39,9 +39,9 @@ std::string describeWorld(const bspf::World& world, const std::string& fileName)
     line("input") << build->input_triangles() << " triangles, " << build->input_vertices()
                   << " vertices\n";
     line("cleaning") << build->welded_vertices() << " vertices welded, "
-                     << build->dropped_degenerate() << " degenerate, "
-                     << build->dropped_zero_area() << " zero-area, "
-                     << build->dropped_duplicate() << " duplicate triangles dropped\n";
+                     << build->dropped_degenerate() << " degenerate, " << build->dropped_zero_area()
+                     << " zero-area, " << build->dropped_duplicate()
+                     << " duplicate triangles dropped\n";
   }
   line("triangles") << world.triangles().size() << "\n";
   line("vertices") << world.vertices().size() << "\n";
@@ -51,8 +51,7 @@ std::string describeWorld(const bspf::World& world, const std::string& fileName)
   line("triangles per leaf") << "max " << tree.trianglesPerLeafMax << ", mean "
                              << tree.trianglesPerLeafMean << "\n";
   line("references per tri") << tree.referencesPerTriangle << "\n";
-  line("size") << world.bytes().size() << " bytes, " << tree.bytesPerTriangle
-               << " per triangle\n";
+  line("size") << world.bytes().size() << " bytes, " << tree.bytesPerTriangle << " per triangle\n";
   return out.str();
 }
 

@@ -14,8 +14,8 @@ bspf::schema::Plane toPlane(const Eigen::Vector3d& normal, const Eigen::Vector3d
                              static_cast<float>(nf.cast<double>().dot(through)));
 }
 
-bspf::schema::TrianglePlanes trianglePlanes(const Mesh& mesh,
-                                            const std::array<std::uint32_t, 3>& t) {
+bspf::schema::TrianglePlanes trianglePlanes(const Mesh& mesh, const std::array<std::uint32_t, 3>& t,
+                                            std::uint8_t meetable) {
   const Eigen::Vector3d p[3] = {mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]};
   const Eigen::Vector3d face = (p[1] - p[0]).cross(p[2] - p[0]).normalized();
   std::array<Eigen::Vector3d, 3> edgeNormal;
@@ -31,16 +31,19 @@ bspf::schema::TrianglePlanes trianglePlanes(const Mesh& mesh,
   }
   return bspf::schema::TrianglePlanes(toPlane(face, (p[0] + p[1] + p[2]) / 3.0),
                                       flatbuffers::span<const bspf::schema::Plane, 3>(edges),
-                                      flatbuffers::span<const bspf::schema::Plane, 3>(caps));
+                                      flatbuffers::span<const bspf::schema::Plane, 3>(caps),
+                                      meetable);
 }
 
 }  // namespace
 
-std::vector<bspf::schema::TrianglePlanes> computeTrianglePlanes(const Mesh& mesh,
-                                                                bspf::ThreadPool* pool) {
+std::vector<bspf::schema::TrianglePlanes> computeTrianglePlanes(
+    const Mesh& mesh, std::span<const std::uint8_t> meetable, bspf::ThreadPool* pool) {
   std::vector<bspf::schema::TrianglePlanes> out(mesh.triangles.size());
   const auto fill = [&](int, std::size_t first, std::size_t last) {
-    for (std::size_t i = first; i < last; ++i) out[i] = trianglePlanes(mesh, mesh.triangles[i]);
+    for (std::size_t i = first; i < last; ++i)
+      out[i] = trianglePlanes(mesh, mesh.triangles[i],
+                              meetable.empty() ? kAllPlanesMeetable : meetable[i]);
   };
   // Each triangle's planes land in its own slot: the same bytes on any
   // number of threads. Chunks of 4,096 keep the hand-out cheap.

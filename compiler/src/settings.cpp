@@ -80,7 +80,8 @@ std::string describeOptions(const CompileSettings& s) {
       << " balance-weight=" << s.tree.balanceWeight << " split-weight=" << s.tree.splitWeight
       << " query-reach=" << s.tree.queryReach << " candidates=" << toString(s.tree.candidates)
       << " axis-candidates=" << s.tree.axisCandidatesPerAxis
-      << " triangle-candidates=" << s.tree.triangleCandidates;
+      << " triangle-candidates=" << s.tree.triangleCandidates
+      << " drop-covered-faces=" << (s.dropCoveredFaces ? 1 : 0);
   // The reach rule shapes the output too: how many points and which body.
   if (!s.reach.from.empty())
     out << " reach-points=" << s.reach.from.size() << " body-radii=" << s.reach.radiusXZ << ","

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "narrow_phase.h"
+#include "rounded_edges.h"
 #include "slide.h"
 
 namespace bspf {
@@ -31,7 +32,7 @@ struct Hit {
 // value, if any (else !found()).
 Hit findBlockingTriangle(const World& world, const Vec3& start, const Vec3& end,
                          EllipsoidRadii radii, const Bounds& swept, auto& local,
-                         std::span<const detail::CandidateBlock> blocks) {
+                         std::span<const detail::CandidateBlock> blocks, float walkableNormalY) {
   const Vec3 move = end - start;
   const float moveLength = move.norm();
   const Vec3 direction = moveLength > 0 ? Vec3(move / moveLength) : Vec3::Zero();
@@ -54,15 +55,27 @@ Hit findBlockingTriangle(const World& world, const Vec3& start, const Vec3& end,
       // article leaves this position unspecified: testing the end lets fast
       // bodies skip small triangles). A body already within it is tested at
       // its start and at its end.
+      // `point`: where the planes were met.
+      Vec3 point = end;
       bool inside;
       if (startSide >= reach) {
         const float f = (startSide - reach) / (startSide - endSide);
-        inside = candidate.grown.inside(start + f * move);
+        point = start + f * move;
+        inside = candidate.grown.inside(point);
+      } else if (candidate.grown.inside(start)) {
+        point = start;
+        inside = true;
       } else {
-        inside = candidate.grown.inside(start) || candidate.grown.inside(end);
+        inside = candidate.grown.inside(end);
       }
       if (!inside) continue;
       const Vec3 normal(block.normalX[lane], block.normalY[lane], block.normalZ[lane]);
+      // A steep face's squared-off edge that a rounded body rides over
+      // (a lip's top edge) does not block: the walkable face behind it
+      // holds the body (rounded_edges.h).
+      if (normal.y() < walkableNormalY && detail::ridesOverEdge(world, candidate.triangle, point,
+                                                                start, end, radii, walkableNormalY))
+        continue;
       const float facing = normal.dot(direction);
       const std::uint32_t t = candidate.triangle;
       if (!best.found() || facing < best.facing || (facing == best.facing && t < best.triangle))
@@ -138,7 +151,18 @@ void growPlanes(const World& world, std::uint32_t triangle, EllipsoidRadii radii
     grow(*planes.edges()->Get(k), 2 * k);
     grow(*planes.caps()->Get(k), 2 * k + 1);
   }
-  for (int k = 6; k < 8; ++k) grown.set(k, Vec3::Zero(), -std::numeric_limits<float>::infinity());
+  // A plane the blob marks as never met (TrianglePlanes::meetable) always
+  // holds, like lanes 6 and 7: the face blocks beyond it too. bspc keeps
+  // every plane (docs/algorithm.md), so this is one test per triangle.
+  constexpr float kAlways = -std::numeric_limits<float>::infinity();
+  constexpr unsigned kAllMeetable = 0b111111;
+  if (const unsigned meetable = planes.meetable(); meetable != kAllMeetable) [[unlikely]] {
+    for (int k = 0; k < 6; ++k) {
+      const unsigned bit = k % 2 == 0 ? 1u << (k / 2) : 8u << (k / 2);
+      if (!(meetable & bit)) grown.set(k, Vec3::Zero(), kAlways);
+    }
+  }
+  for (int k = 6; k < 8; ++k) grown.set(k, Vec3::Zero(), kAlways);
   grown.ready = true;
 }
 
@@ -162,12 +186,19 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
   for (int iteration = 0;; ++iteration) {
     const Bounds swept = sweptBounds(start, result.end, radii);
     const Hit hit = findBlockingTriangle(world, start, result.end, radii, swept, local,
-                                         local.around(world, swept, moveLength, radii, scratch));
+                                         local.around(world, swept, moveLength, radii, scratch),
+                                         walkableNormalY);
     if (!hit.found()) return result;
     if (iteration == settings.maxIterations) {
-      result.refused = true;
-      result.end = start;
-      return result;
+      // The six planes found no place for the end (a body held between
+      // squared-off edges that push it back and forth): the exact sweep,
+      // whose rounded contacts have no such traps, makes the move from the
+      // same start instead (docs/algorithm.md, "Ghost edges"); it refuses
+      // only what it cannot place either.
+      SlideResult exact =
+          slideExact(world, start, desiredEnd, radii, settings, walkableNormalY, scratch);
+      exact.iterations += result.iterations;
+      return exact;
     }
     const Vec3& normal = hit.normal;
     const bool walkable = normal.y() >= walkableNormalY;

@@ -122,6 +122,9 @@ bool checkGeometry(const schema::World& w, Checker& check) {
   for (flatbuffers::uoffset_t i = 0; i < planes->size(); ++i) {
     const schema::TrianglePlanes& p = *planes->Get(i);
     if (!check.plane(p.face(), "face plane of triangle", i)) return false;
+    if (p.meetable() >= 64)
+      return check.fail("meetable planes of triangle " + std::to_string(i) +
+                        " set a bit beyond the six planes");
     for (int k = 0; k < 3; ++k)
       if (!check.plane(*p.edges()->Get(k), "edge plane of triangle", i) ||
           !check.plane(*p.caps()->Get(k), "cap plane of triangle", i))

@@ -40,15 +40,6 @@ const std::map<std::pair<std::string, CollisionMethod>, DocumentedFailure>& docu
       // "bumps a body 0.67 m off its line"
       {{"outer corners and edges passed closely (ghost collisions)", CollisionMethod::Planes},
        {{{0, "deviation from the open-floor run, m", 0.70, true}}, 0, 5, 0.005}},
-      // "5 refused moves and ended 7 m from the one-solid run"
-      {{"seams between abutting solids: floor and wall of 2 m blocks", CollisionMethod::Planes},
-       {{{0, "deviation from the one-solid run, m", 7.05, true}}, 5, 10, 0.012}},
-      // "stops 0.33 m below the top"; the set-down body stays put
-      {{"slope at 44 degrees (walkable limit 45)", CollisionMethod::Planes},
-       {{{0, "walker's rise, m", 2.62, false}, {1, "set-down body's move, m", 0.001, true}},
-        0,
-        185,
-        0.005}},
       // "climbs 0.00 m": the figure cannot drop; frames stuck can grow
       {{"stairs, 0.15 m risers", CollisionMethod::Planes}, {{}, 0, 165, 0.005}},
       {{"stairs, 0.30 m risers", CollisionMethod::Planes}, {{}, 0, 165, 0.005}},

@@ -855,7 +855,13 @@ schema::TrianglePlanes withFaceNormal(const schema::TrianglePlanes& planes,
   return schema::TrianglePlanes(
       schema::Plane(normal, planes.face().distance()),
       flatbuffers::span<const schema::Plane, 3>(planes.edges()->data(), 3),
-      flatbuffers::span<const schema::Plane, 3>(planes.caps()->data(), 3));
+      flatbuffers::span<const schema::Plane, 3>(planes.caps()->data(), 3), planes.meetable());
+}
+
+schema::TrianglePlanes withMeetable(const schema::TrianglePlanes& planes, std::uint8_t meetable) {
+  return schema::TrianglePlanes(
+      planes.face(), flatbuffers::span<const schema::Plane, 3>(planes.edges()->data(), 3),
+      flatbuffers::span<const schema::Plane, 3>(planes.caps()->data(), 3), meetable);
 }
 
 }  // namespace
@@ -889,6 +895,9 @@ TEST_CASE("Semantic violations are Malformed with a message saying what is wrong
       {"a face normal 0.2% too long",
        [](Content& c) { c.planes[2] = withFaceNormal(c.planes[2], schema::Vec3(0, 1.002f, 0)); },
        "face plane of triangle 2 has a normal not of unit length"},
+      {"a meetable bit beyond the six planes",
+       [](Content& c) { c.planes[4] = withMeetable(c.planes[4], 0b1000000); },
+       "meetable planes of triangle 4 set a bit beyond the six planes"},
       {"a face normal 0.2% too short",
        [](Content& c) { c.planes[2] = withFaceNormal(c.planes[2], schema::Vec3(0.998f, 0, 0)); },
        "face plane of triangle 2 has a normal not of unit length"},
@@ -960,9 +969,9 @@ TEST_CASE("Semantic violations are Malformed with a message saying what is wrong
          const schema::TrianglePlanes& p = c.planes[4];
          schema::Plane edges[3] = {*p.edges()->Get(0), *p.edges()->Get(1), *p.edges()->Get(2)};
          edges[1] = schema::Plane(schema::Vec3(0.5f, 0, 0), edges[1].distance());
-         c.planes[4] =
-             schema::TrianglePlanes(p.face(), flatbuffers::span<const schema::Plane, 3>(edges),
-                                    flatbuffers::span<const schema::Plane, 3>(p.caps()->data(), 3));
+         c.planes[4] = schema::TrianglePlanes(
+             p.face(), flatbuffers::span<const schema::Plane, 3>(edges),
+             flatbuffers::span<const schema::Plane, 3>(p.caps()->data(), 3), p.meetable());
        },
        "edge plane of triangle 4 has a normal not of unit length"},
       {"a zero cap normal",
@@ -972,7 +981,7 @@ TEST_CASE("Semantic violations are Malformed with a message saying what is wrong
          caps[2] = schema::Plane(schema::Vec3(0, 0, 0), 0);
          c.planes[0] = schema::TrianglePlanes(
              p.face(), flatbuffers::span<const schema::Plane, 3>(p.edges()->data(), 3),
-             flatbuffers::span<const schema::Plane, 3>(caps));
+             flatbuffers::span<const schema::Plane, 3>(caps), p.meetable());
        },
        "cap plane of triangle 0 has a normal not of unit length"},
       {"a NaN plane distance",
@@ -981,7 +990,7 @@ TEST_CASE("Semantic violations are Malformed with a message saying what is wrong
          const schema::Plane face(p.face().normal(), std::numeric_limits<float>::quiet_NaN());
          c.planes[1] = schema::TrianglePlanes(
              face, flatbuffers::span<const schema::Plane, 3>(p.edges()->data(), 3),
-             flatbuffers::span<const schema::Plane, 3>(p.caps()->data(), 3));
+             flatbuffers::span<const schema::Plane, 3>(p.caps()->data(), 3), p.meetable());
        },
        "face plane of triangle 1 has a non-finite value"},
       {"a non-unit split normal",

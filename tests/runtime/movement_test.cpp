@@ -778,15 +778,15 @@ TEST_CASE("a move still blocked after exactly maxIterations slides is refused",
     body.velocity = velocity;
     bspf::StepReport report;
     bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch, &report);
-    REQUIRE(report.iterations == slides);
+    // Planes: a move its planes leave blocked is made by the exact sweep
+    // (its own slides counted too), which refuses it here as well.
+    const bool handedOn = method == bspf::CollisionMethod::Planes && slides == 1;
+    REQUIRE(report.iterations == (handedOn ? 2 * slides : slides));
     REQUIRE(report.refused == (slides == 1));
     if (slides == 2) {
       // Slid into the corner, against both walls.
       REQUIRE(body.position.x() == Approx(5 - 0.45f).margin(2e-3));
       REQUIRE(body.position.z() == Approx(5 - 0.45f).margin(2e-3));
-    } else if (method == bspf::CollisionMethod::Planes) {
-      // Refused: the body stays at its start.
-      REQUIRE((body.position.array() == start.array()).all());
     } else {
       // Refused: the body stops at its last contact, touching a wall, clear of both.
       REQUIRE(std::max(body.position.x(), body.position.z()) == Approx(5 - 0.45f).margin(2e-3));

@@ -65,8 +65,8 @@ std::vector<std::uint8_t> compile(const bspc::Mesh& mesh,
 struct CompiledMesh {
   AlignedBytes bytes;
   bspf::World world;
-  explicit CompiledMesh(const bspc::Mesh& mesh)
-      : bytes(compile(mesh)), world(*bspf::viewWorld(bytes.span()).world) {}
+  explicit CompiledMesh(const bspc::Mesh& mesh, const bspc::CompileSettings& settings = {})
+      : bytes(compile(mesh, settings)), world(*bspf::viewWorld(bytes.span()).world) {}
 };
 
 /// The point of triangle `t` of `world` with weights u and v on its second

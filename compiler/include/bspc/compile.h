@@ -3,6 +3,7 @@
 #pragma once
 
 #include <bspc/clean.h>
+#include <bspc/edges.h>
 #include <bspc/mesh.h>
 #include <bspc/reach.h>
 #include <bspc/settings.h>
@@ -17,12 +18,14 @@ namespace bspc {
 
 /// Wall-clock seconds per stage.
 struct StageTimes {
-  double import = 0, clean = 0, reach = 0, buildTree = 0, planes = 0, write = 0;
+  double import = 0, clean = 0, edges = 0, reach = 0, buildTree = 0, planes = 0, write = 0;
 };
 
 struct CompileReport {
   CleanReport clean;
   ReachReport reach;
+  /// Covered faces dropped, edges by kind, edge planes skipped.
+  EdgeReport edges;
   StageTimes seconds;
   /// CPU seconds per stage, all of this process's threads together (the
   /// contained import's child is not counted: its time is the wait).
@@ -37,8 +40,9 @@ struct CompileReport {
   std::vector<std::string> warnings;
 };
 
-/// import, clean, drop faces no body can reach (settings.reach, when it
-/// names points), build tree, precompute planes, write: `input` (any format
+/// import, clean, drop covered faces, drop faces no body can reach
+/// (settings.reach, when it names points), build tree, classify edges and
+/// precompute planes, write: `input` (any format
 /// assimp reads, a regular file) to the blob at `output`, and, when
 /// `statsJson` is not empty, the report as JSON (toJson) to that file, and,
 /// when `exportObj` is not empty, the compiled model as an OBJ (toObj) to

@@ -107,8 +107,8 @@ inline constexpr std::uint64_t kPeakBytesPerTriangle = 750;
 struct LimitSettings {
   /// Largest blob to write, bytes: 1 to kMaxBlobBytes (the default). Checked
   /// right after clean against the bytes every triangle and vertex takes in
-  /// a blob whatever the tree (minimumBlobBytes in write.h: about 152 a
-  /// triangle plus 12 a vertex, so about 14 million triangles at most),
+  /// a blob whatever the tree (minimumBlobBytes in write.h: about 156 a
+  /// triangle plus 12 a vertex, so about 13.7 million triangles at most),
   /// again once the tree is built, and on the blob itself.
   std::uint64_t maxBlobBytes = kMaxBlobBytes;
   /// Largest peak memory the compile may take, bytes; 0, the default, sets
@@ -155,6 +155,11 @@ struct CompileSettings {
   /// the speed depends on it: the blob is the same, byte for byte, for any
   /// count, so it is not recorded in the blob's options.
   unsigned threads = 0;
+  /// Drop the faces lying against an opposite face of another solid
+  /// (dropCoveredFaces, bspc/edges.h). Off (`--keep-covered-faces`): every
+  /// cleaned face is kept, and a level of closed solids stays a union of
+  /// closed meshes (what a winding-number inside test needs).
+  bool dropCoveredFaces = true;
   /// Called with a one-line status, a stage's name and how far it is
   /// ("build tree 42%"), as the compile goes on; may be empty. From the
   /// compiling thread or the tree build's, one call at a time. bspc prints

@@ -18,7 +18,8 @@
 //      point where the centre crosses the triangle's offset plane; the hit
 //      with the lowest facing value moves the end out of it (slide), and the
 //      test starts again, up to MovementSettings::maxIterations slides; a
-//      move still blocked after that is refused (the body stays put); a
+//      move still blocked after that is made by the exact sweep instead
+//      (below), which refuses it only if it cannot place it either; a
 //      grounded body stopped by something steep may step up onto it
 //      (MovementSettings::maxStepHeight, off by default); a body that was
 //      grounded and whose move left walkable ground is set back down onto
@@ -86,8 +87,8 @@ struct MovementSettings {
   /// this flat or flatter grounds the body. Default 45.
   float walkableSlopeDegrees = 45.0f;
   /// Slides per step against the level; a move still blocked after this many
-  /// is refused. 1 to 32. Default 5, as in the article. Too few refuses moves
-  /// in creases and corners (the body sticks); more costs time only there.
+  /// is refused (Planes: handed to the exact sweep first). 1 to 32. Default 5, as in the article.
+  /// Too few refuses moves in creases and corners (the body sticks); more costs time only there.
   int maxIterations = 5;
   /// Restitution e, 0 to 1: 0 slides along a surface; e > 0 reflects the
   /// velocity's normal component scaled by e and keeps the tangential one.
@@ -182,9 +183,11 @@ inline constexpr int kMaxReportedContacts = 8;
 struct StepReport {
   /// Slides against the level (0 when nothing was in the way).
   int iterations = 0;
-  /// The move was still blocked after maxIterations slides. Planes: the body
-  /// stayed at its start. ExactSweep: it stopped at its last contact point
-  /// (already a safe position).
+  /// The move was still blocked after maxIterations slides, and it stopped
+  /// at its last contact point (already a safe position). Planes: a move
+  /// the six planes leave blocked is made by the exact sweep from the same
+  /// start, with its own maxIterations slides; refused is set only when that
+  /// one is still blocked too (iterations counts both).
   bool refused = false;
   /// A walkable contact this step.
   bool grounded = false;

@@ -26,7 +26,7 @@ namespace bspf {
 
 /// The blob format version this runtime reads. bspc writes it; the loader
 /// refuses any other value with LoadStatus::WrongVersion.
-inline constexpr std::uint32_t kFormatVersion = 2;
+inline constexpr std::uint32_t kFormatVersion = 3;
 
 /// The four-character file identifier after the size prefix.
 inline constexpr const char* kFileIdentifier = "BSPF";

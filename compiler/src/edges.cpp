@@ -1,0 +1,390 @@
+#include <bspc/edges.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <span>
+#include <tuple>
+#include <unordered_map>
+
+namespace bspc {
+
+namespace {
+
+using V3 = Eigen::Vector3d;
+using V2 = Eigen::Vector2d;
+
+// Angles within this of each other (radians) are equal: float corners of a
+// 10 cm triangle 100 m from the origin are 1e-5 m, 1e-4 rad, apart.
+constexpr double kAngleTolerance = 1e-3;
+// Below this a face about an edge lies on the triangle itself (a twin).
+constexpr double kOnTriangle = 1e-6;
+
+struct EdgeUse {
+  std::uint32_t low, high;  // the edge's vertices, low < high
+  std::uint32_t triangle;
+  int k;  // edge k of the triangle: corner k to corner k + 1
+  auto key() const { return std::tie(low, high, triangle, k); }
+};
+
+// Every triangle edge, grouped by its pair of vertices (sorted: the
+// groups do not depend on hashing).
+class EdgeMap {
+ public:
+  explicit EdgeMap(const Mesh& mesh) {
+    uses_.reserve(mesh.triangles.size() * 3);
+    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
+        uses_.push_back({std::min(a, b), std::max(a, b), t, k});
+      }
+    std::sort(uses_.begin(), uses_.end(),
+              [](const EdgeUse& x, const EdgeUse& y) { return x.key() < y.key(); });
+    group_.assign(mesh.triangles.size(), {});
+    for (std::size_t i = 0; i < uses_.size();) {
+      std::size_t j = i;
+      while (j < uses_.size() && uses_[j].low == uses_[i].low && uses_[j].high == uses_[i].high)
+        ++j;
+      for (std::size_t u = i; u < j; ++u) group_[uses_[u].triangle][uses_[u].k] = {i, j};
+      i = j;
+    }
+  }
+  // The uses of triangle t's edge k (t's own among them).
+  std::span<const EdgeUse> around(std::uint32_t t, int k) const {
+    const auto [first, last] = group_[t][k];
+    return {uses_.data() + first, last - first};
+  }
+
+ private:
+  std::vector<EdgeUse> uses_;
+  std::vector<std::array<std::pair<std::size_t, std::size_t>, 3>> group_;
+};
+
+struct Geometry {
+  const Mesh& mesh;
+  std::vector<V3> normal;
+  explicit Geometry(const Mesh& m) : mesh(m) {
+    normal.reserve(m.triangles.size());
+    for (const auto& t : m.triangles)
+      normal.push_back((m.vertices[t[1]] - m.vertices[t[0]])
+                           .cross(m.vertices[t[2]] - m.vertices[t[0]])
+                           .normalized());
+  }
+  const V3& corner(std::uint32_t t, int k) const { return mesh.vertices[mesh.triangles[t][k % 3]]; }
+  // The unit direction in triangle t's plane, perpendicular to its edge k,
+  // pointing into t.
+  V3 inward(std::uint32_t t, int k) const {
+    return normal[t].cross(corner(t, k + 1) - corner(t, k)).normalized();
+  }
+  // The angle, in [0, 2 pi), from triangle t (turning through `side`, t's
+  // normal or its opposite) to triangle u about their shared edge (t's edge
+  // k, u's edge j).
+  double turn(std::uint32_t t, int k, const V3& side, std::uint32_t u, int j) const {
+    const V3 w = inward(u, j);
+    double angle = std::atan2(w.dot(side), w.dot(inward(t, k)));
+    if (angle < 0) angle += 2 * std::numbers::pi;
+    return angle;
+  }
+  // Whether u runs along the shared edge the opposite way to t (one
+  // consistently wound surface).
+  bool consistent(std::uint32_t t, int k, std::uint32_t u, int j) const {
+    return mesh.triangles[t][k] == mesh.triangles[u][(j + 1) % 3];
+  }
+};
+
+// The face first met turning about t's edge k from t through `side`, as
+// (triangle, its edge, angle); triangle == t when none (faces lying on t
+// itself, at angle 0, are passed over). Ties: the lower triangle index.
+struct Turn {
+  std::uint32_t triangle;
+  int k;
+  double angle;
+};
+Turn firstTurn(const Geometry& g, const EdgeMap& edges, std::uint32_t t, int k, const V3& side) {
+  Turn best{t, k, 2 * std::numbers::pi};
+  for (const EdgeUse& use : edges.around(t, k)) {
+    if (use.triangle == t) continue;
+    const double angle = g.turn(t, k, side, use.triangle, use.k);
+    if (angle < kOnTriangle || angle > 2 * std::numbers::pi - kOnTriangle) continue;
+    // Coincident faces (a touching solid's face, the other side of a
+    // two-sided one) meet at the same angle: the one wound with t first.
+    const bool tie = std::abs(angle - best.angle) <= kOnTriangle;
+    if ((!tie && angle < best.angle) ||
+        (tie && g.consistent(t, k, use.triangle, use.k) &&
+         (best.triangle == t || !g.consistent(t, k, best.triangle, best.k))))
+      best = {use.triangle, use.k, angle};
+  }
+  return best;
+}
+
+// Triangles with the same three corners as t wound the other way.
+bool hasTwin(const Mesh& mesh, const EdgeMap& edges, std::uint32_t t) {
+  const auto& tri = mesh.triangles[t];
+  for (const EdgeUse& use : edges.around(t, 0)) {
+    if (use.triangle == t) continue;
+    const auto& other = mesh.triangles[use.triangle];
+    if (std::find(other.begin(), other.end(), tri[2]) != other.end()) return true;
+  }
+  return false;
+}
+
+// Whether each triangle's solid lies behind it: at each edge, turning from
+// the triangle through its back, the first face met (passing over faces on
+// the triangle itself) is wound with it and either closes a wedge of solid
+// (under 180 degrees) and has no twin (is not one side of a two-sided
+// surface), or continues the plane and is itself backed. Decided by a fixed point: a plane of
+// coplanar triangles is backed only if its rim is.
+std::vector<bool> solidBehind(const Geometry& g, const EdgeMap& edges) {
+  const std::size_t n = g.mesh.triangles.size();
+  std::vector<bool> twin(n);
+  for (std::uint32_t t = 0; t < n; ++t) twin[t] = hasTwin(g.mesh, edges, t);
+  std::vector<bool> backed(n, true);
+  std::vector<std::vector<std::uint32_t>> dependsOn(n);
+  for (std::uint32_t t = 0; t < n; ++t) {
+    for (int k = 0; k < 3 && backed[t]; ++k) {
+      const Turn first = firstTurn(g, edges, t, k, -g.normal[t]);
+      const bool found = first.triangle != t;
+      if (!found || !g.consistent(t, k, first.triangle, first.k) || first.angle < kAngleTolerance ||
+          first.angle > std::numbers::pi + kAngleTolerance) {
+        backed[t] = false;
+      } else if (first.angle < std::numbers::pi - kAngleTolerance) {
+        // A wedge of solid, unless its face is one side of a two-sided surface.
+        if (twin[first.triangle]) backed[t] = false;
+      } else {
+        if (g.normal[t].dot(g.normal[first.triangle]) <= 0)
+          backed[t] = false;
+        else
+          dependsOn[t].push_back(first.triangle);
+      }
+    }
+  }
+  // Unbacked triangles unback those that rely on them, through the chain
+  // (a worklist: linear however long the chains of coplanar triangles).
+  std::vector<std::vector<std::uint32_t>> reliedOnBy(n);
+  for (std::uint32_t t = 0; t < n; ++t)
+    for (const std::uint32_t u : dependsOn[t]) reliedOnBy[u].push_back(t);
+  std::vector<std::uint32_t> pending;
+  for (std::uint32_t t = 0; t < n; ++t)
+    if (!backed[t]) pending.push_back(t);
+  while (!pending.empty()) {
+    const std::uint32_t u = pending.back();
+    pending.pop_back();
+    for (const std::uint32_t t : reliedOnBy[u])
+      if (backed[t]) {
+        backed[t] = false;
+        pending.push_back(t);
+      }
+  }
+  return backed;
+}
+
+// Plane buckets: quantised normal and distance, so coincident planes land in
+// the same or a neighbouring bucket.
+struct PlaneKey {
+  std::int64_t nx, ny, nz, d;
+  bool operator==(const PlaneKey&) const = default;
+};
+struct PlaneKeyHash {
+  std::size_t operator()(const PlaneKey& k) const {
+    std::uint64_t h = std::uint64_t(k.nx) * 0x9E3779B97F4A7C15ull;
+    h ^= std::uint64_t(k.ny) * 0xC2B2AE3D27D4EB4Full + (h << 6) + (h >> 2);
+    h ^= std::uint64_t(k.nz) * 0x165667B19E3779F9ull + (h << 6) + (h >> 2);
+    h ^= std::uint64_t(k.d) * 0x27D4EB2F165667C5ull + (h << 6) + (h >> 2);
+    return std::size_t(h);
+  }
+};
+constexpr double kNormalStep = 1e-3, kDistanceStep = 1e-2;
+PlaneKey planeKey(const V3& n, double d) {
+  return {std::llround(n.x() / kNormalStep), std::llround(n.y() / kNormalStep),
+          std::llround(n.z() / kNormalStep), std::llround(d / kDistanceStep)};
+}
+
+using Polygon = std::vector<V2>;
+
+double area(const Polygon& p) {
+  double twice = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const V2 &a = p[i], &b = p[(i + 1) % p.size()];
+    twice += a.x() * b.y() - a.y() * b.x();
+  }
+  return twice / 2;
+}
+
+// The parts of convex `p` on each side of the line through a with direction
+// `along`: `inside` where cross(along, q - a) >= -margin.
+void split(const Polygon& p, const V2& a, const V2& along, double margin, Polygon& inside,
+           Polygon& outside) {
+  inside.clear(), outside.clear();
+  auto side = [&](const V2& q) {
+    const V2 r = q - a;
+    return along.x() * r.y() - along.y() * r.x() + margin;
+  };
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const V2 &q = p[i], &next = p[(i + 1) % p.size()];
+    const double s = side(q), sNext = side(next);
+    (s >= 0 ? inside : outside).push_back(q);
+    if ((s >= 0) != (sNext >= 0)) {
+      const V2 cross = q + (next - q) * (s / (s - sNext));
+      inside.push_back(cross);
+      outside.push_back(cross);
+    }
+  }
+}
+
+// Whether triangle f is covered by the union of triangles `cover` (all in
+// its plane, facing the other way), each grown by 0.1 mm.
+bool covered(const Geometry& g, std::uint32_t f, const std::vector<std::uint32_t>& cover) {
+  const V3 origin = g.corner(f, 0);
+  const V3 u = (g.corner(f, 1) - origin).normalized();
+  const V3 v = g.normal[f].cross(u);
+  auto flat = [&](const V3& p) { return V2((p - origin).dot(u), (p - origin).dot(v)); };
+  std::vector<Polygon> left{{flat(g.corner(f, 0)), flat(g.corner(f, 1)), flat(g.corner(f, 2))}};
+  constexpr double kMargin = 1e-4, kLeftArea = 1e-8;
+  constexpr std::size_t kMaxPieces = 256;
+  Polygon inside, outside;
+  for (const std::uint32_t c : cover) {
+    Polygon shape{flat(g.corner(c, 0)), flat(g.corner(c, 1)), flat(g.corner(c, 2))};
+    if (area(shape) < 0) std::reverse(shape.begin(), shape.end());
+    std::vector<Polygon> next;
+    for (Polygon piece : left) {
+      for (int e = 0; e < 3 && !piece.empty(); ++e) {
+        const V2 along = (shape[(e + 1) % 3] - shape[e]).normalized();
+        split(piece, shape[e], along, kMargin, inside, outside);
+        if (outside.size() >= 3 && std::abs(area(outside)) > kLeftArea) next.push_back(outside);
+        piece = inside.size() >= 3 ? inside : Polygon{};
+      }
+    }
+    left = std::move(next);
+    if (left.empty()) return true;
+    if (left.size() > kMaxPieces) return false;
+  }
+  return false;
+}
+
+}  // namespace
+
+Mesh dropCoveredFaces(const Mesh& mesh, EdgeReport& report) {
+  const Geometry g(mesh);
+  const EdgeMap edges(mesh);
+  const std::vector<bool> backed = solidBehind(g, edges);
+  const std::size_t n = mesh.triangles.size();
+
+  std::unordered_map<PlaneKey, std::vector<std::uint32_t>, PlaneKeyHash> planes;
+  for (std::uint32_t t = 0; t < n; ++t)
+    if (backed[t]) planes[planeKey(g.normal[t], g.normal[t].dot(g.corner(t, 0)))].push_back(t);
+
+  auto bounds = [&](std::uint32_t t) {
+    Eigen::AlignedBox3d box;
+    for (int k = 0; k < 3; ++k) box.extend(g.corner(t, k));
+    return box;
+  };
+  std::vector<bool> drop(n, false);
+  std::vector<std::uint32_t> cover;
+  for (std::uint32_t f = 0; f < n; ++f) {
+    const V3 opposite = -g.normal[f];
+    const double d = opposite.dot(g.corner(f, 0));
+    const PlaneKey home = planeKey(opposite, d);
+    Eigen::AlignedBox3d box = bounds(f);
+    double scale = 1;
+    for (int k = 0; k < 3; ++k) scale = std::max(scale, g.corner(f, k).cwiseAbs().maxCoeff());
+    const double tolerance = 1e-4 + 1e-6 * scale;
+    box.min().array() -= tolerance, box.max().array() += tolerance;
+    cover.clear();
+    for (std::int64_t dx = -1; dx <= 1; ++dx)
+      for (std::int64_t dy = -1; dy <= 1; ++dy)
+        for (std::int64_t dz = -1; dz <= 1; ++dz)
+          for (std::int64_t dd = -1; dd <= 1; ++dd) {
+            const auto it = planes.find({home.nx + dx, home.ny + dy, home.nz + dz, home.d + dd});
+            if (it == planes.end()) continue;
+            for (const std::uint32_t c : it->second) {
+              if (c == f || g.normal[c].dot(opposite) < 1 - 2e-7) continue;
+              if (!box.intersects(bounds(c))) continue;
+              bool inPlane = true;
+              for (int k = 0; k < 3; ++k)
+                inPlane = inPlane &&
+                          std::abs(g.normal[c].dot(g.corner(f, k) - g.corner(c, 0))) <= tolerance &&
+                          std::abs(g.normal[f].dot(g.corner(c, k) - g.corner(f, 0))) <= tolerance;
+              if (inPlane) cover.push_back(c);
+            }
+          }
+    // Many overlapping faces in one plane (hostile input): keep the face
+    // rather than clip it against them all.
+    constexpr std::size_t kMaxCover = 64;
+    if (cover.empty() || cover.size() > kMaxCover) continue;
+    std::sort(cover.begin(), cover.end());
+    drop[f] = covered(g, f, cover);
+  }
+
+  // The kept triangles in order, and the vertices they use in order of first use.
+  Mesh out;
+  std::vector<std::uint32_t> newIndex(mesh.vertices.size(), ~std::uint32_t(0));
+  for (std::uint32_t t = 0; t < n; ++t) {
+    if (drop[t]) {
+      ++report.droppedCovered;
+      continue;
+    }
+    std::array<std::uint32_t, 3> kept;
+    for (int k = 0; k < 3; ++k) {
+      std::uint32_t& index = newIndex[mesh.triangles[t][k]];
+      if (index == ~std::uint32_t(0)) {
+        index = std::uint32_t(out.vertices.size());
+        out.vertices.push_back(mesh.vertices[mesh.triangles[t][k]]);
+      }
+      kept[k] = index;
+    }
+    out.triangles.push_back(kept);
+  }
+  return out;
+}
+
+std::vector<TriangleEdges> classifyEdges(const Mesh& mesh) {
+  const Geometry g(mesh);
+  const EdgeMap edges(mesh);
+  std::vector<TriangleEdges> out(mesh.triangles.size());
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const Turn first = firstTurn(g, edges, t, k, g.normal[t]);
+      EdgeKind& kind = out[t].kind[k];
+      if (first.triangle == t)
+        kind = EdgeKind::Open;
+      else if (first.angle < std::numbers::pi - kAngleTolerance)
+        kind = g.consistent(t, k, first.triangle, first.k) ? EdgeKind::Concave : EdgeKind::Convex;
+      else if (first.angle <= std::numbers::pi + kAngleTolerance &&
+               g.normal[t].dot(g.normal[first.triangle]) > 0 &&
+               g.consistent(t, k, first.triangle, first.k))
+        kind = EdgeKind::Coplanar;
+      else
+        kind = EdgeKind::Convex;
+      if (kind == EdgeKind::Coplanar) {
+        const V3 mirror = g.corner(t, k) + g.corner(t, k + 1) - g.corner(t, k + 2);
+        out[t].mirrored[k] = (g.corner(first.triangle, first.k + 2) - mirror).norm() <= 1e-4;
+      }
+    }
+  }
+  return out;
+}
+
+std::vector<std::uint8_t> meetablePlanes(const std::vector<TriangleEdges>& edges,
+                                         EdgeReport& report, bool skipMirrored) {
+  std::vector<std::uint8_t> masks;
+  masks.reserve(edges.size());
+  for (const TriangleEdges& triangle : edges) {
+    std::uint8_t mask = 0b111000;  // caps: always met
+    for (int k = 0; k < 3; ++k) {
+      switch (triangle.kind[k]) {
+        case EdgeKind::Open: ++report.open; break;
+        case EdgeKind::Convex: ++report.convex; break;
+        case EdgeKind::Concave: ++report.concave; break;
+        case EdgeKind::Coplanar: ++report.coplanar; break;
+      }
+      if (skipMirrored && triangle.kind[k] == EdgeKind::Coplanar && triangle.mirrored[k])
+        ++report.skippedEdgePlanes;
+      else
+        mask |= std::uint8_t(1u << k);
+    }
+    masks.push_back(mask);
+  }
+  return masks;
+}
+
+}  // namespace bspc
