@@ -141,6 +141,18 @@ int main(int argc, char** argv) {
       ->type_name("MIB")
       ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1} << 40))
       ->capture_default_str();
+  app.add_option("--drop-surface", settings.clean.dropSurfaces,
+                 "Leave out the triangles of this surface (material name; repeatable)")
+      ->type_name("NAME")
+      ->expected(1)
+      ->allow_extra_args(false)
+      ->take_all();
+  app.add_option("--only-surface", settings.clean.onlySurfaces,
+                 "Keep only the triangles of this surface (material name; repeatable)")
+      ->type_name("NAME")
+      ->expected(1)
+      ->allow_extra_args(false)
+      ->take_all();
   app.add_option("--stats-json", statsJson, "Also write the compile report as JSON to this file")
       ->type_name("FILE");
   app.add_flag("-q,--quiet", quiet, "Print nothing but errors and warnings");
@@ -150,6 +162,8 @@ int main(int argc, char** argv) {
                                                  Quake units (1/32 m), Z up
   bspc scene.gltf -o scene.bspf --stats-json scene.json
                                                  also the compile report as JSON
+  bspc level.obj -o level.bspf --drop-surface trigger --drop-surface water
+                                                 leave two materials out
   bspc --info level.bspf                         verify a blob, print its figures
 
 Exit status: 0 written; 1 the input could not be compiled or a file could
@@ -185,6 +199,11 @@ command line (the error names the option).)");
   settings.tree.candidates = candidateKinds.at(candidatesLower);
   settings.import.memoryLimitBytes = importMemoryMiB << 20;
   if (!infoPath.empty()) return runInfo(infoPath);
+  if (!settings.clean.dropSurfaces.empty() && !settings.clean.onlySurfaces.empty()) {
+    std::cerr << "bspc: error: --drop-surface and --only-surface cannot be used together (see "
+                 "bspc --help)\n";
+    return 2;
+  }
   if (input.empty() || output.empty()) {
     std::cerr << "bspc: error: need an input mesh and -o OUTPUT.bspf (see bspc --help)\n";
     return 2;

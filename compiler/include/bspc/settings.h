@@ -6,6 +6,7 @@
 #include <functional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace bspc {
 
@@ -54,6 +55,13 @@ struct CleanSettings {
   /// Triangles with less area, square metres, are dropped as zero-area. Must
   /// be >= 0. Slivers above it are kept: they are real collision geometry.
   double minTriangleArea = 1e-10;
+  /// Surfaces (the source's materials, Mesh::surfaces) whose triangles are
+  /// left out of the collision model: triggers, decoration. Each name must
+  /// be a surface of the mesh (exact, case-sensitive).
+  std::vector<std::string> dropSurfaces;
+  /// When not empty, the only surfaces whose triangles are kept. Each name
+  /// must be a surface of the mesh. Not with dropSurfaces.
+  std::vector<std::string> onlySurfaces;
 };
 
 struct TreeSettings {
@@ -105,7 +113,7 @@ inline constexpr std::uint64_t kPeakBytesPerTriangle = 750;
 struct LimitSettings {
   /// Largest blob to write, bytes: 1 to kMaxBlobBytes (the default). Checked
   /// right after clean against the bytes every triangle and vertex takes in
-  /// a blob whatever the tree (minimumBlobBytes in write.h: about 152 a
+  /// a blob whatever the tree (minimumBlobBytes in write.h: about 154 a
   /// triangle plus 12 a vertex, so about 14 million triangles at most),
   /// again once the tree is built, and on the blob itself.
   std::uint64_t maxBlobBytes = kMaxBlobBytes;
