@@ -163,6 +163,18 @@ int main(int argc, char** argv) {
   app.add_flag("--keep-covered-faces", keepCovered,
                "Keep the faces lying against an opposite face of another solid (no body can "
                "touch them; dropped by default)");
+  app.add_option("--drop-surface", settings.clean.dropSurfaces,
+                 "Leave out the triangles of this surface (material name; repeatable)")
+      ->type_name("NAME")
+      ->expected(1)
+      ->allow_extra_args(false)
+      ->take_all();
+  app.add_option("--only-surface", settings.clean.onlySurfaces,
+                 "Keep only the triangles of this surface (material name; repeatable)")
+      ->type_name("NAME")
+      ->expected(1)
+      ->allow_extra_args(false)
+      ->take_all();
   app.add_option("--stats-json", statsJson, "Also write the compile report as JSON to this file")
       ->type_name("FILE");
   app.add_option("--export-obj", exportObj,
@@ -176,6 +188,8 @@ int main(int argc, char** argv) {
                                                  Quake units (1/32 m), Z up
   bspc scene.gltf -o scene.bspf --stats-json scene.json
                                                  also the compile report as JSON
+  bspc level.obj -o level.bspf --drop-surface trigger --drop-surface water
+                                                 leave two materials out
   bspc --info level.bspf                         verify a blob, print its figures
 
 Exit status: 0 written; 1 the input could not be compiled or a file could
@@ -219,6 +233,11 @@ command line (the error names the option).)");
     settings.reach.radiusY = bodyRadii[1];
   }
   if (!infoPath.empty()) return runInfo(infoPath);
+  if (!settings.clean.dropSurfaces.empty() && !settings.clean.onlySurfaces.empty()) {
+    std::cerr << "bspc: error: --drop-surface and --only-surface cannot be used together (see "
+                 "bspc --help)\n";
+    return 2;
+  }
   settings.dropCoveredFaces = !keepCovered;
   if (input.empty() || output.empty()) {
     std::cerr << "bspc: error: need an input mesh and -o OUTPUT.bspf (see bspc --help)\n";

@@ -89,6 +89,38 @@ std::array<std::uint32_t, 3> canonicalRotation(const std::array<std::uint32_t, 3
   return t;
 }
 
+// The surface table as the mesh gives it: its own, or kDefaultSurface.
+std::vector<std::string> surfaceNames(const Mesh& mesh) {
+  return mesh.surfaces.empty() ? std::vector<std::string>{kDefaultSurface} : mesh.surfaces;
+}
+
+// Up to 8 names, quoted, for an error message.
+std::string someNames(const std::vector<std::string>& names) {
+  std::string out;
+  for (std::size_t i = 0; i < names.size() && i < 8; ++i) out += (i ? ", '" : "'") + names[i] + "'";
+  if (names.size() > 8) out += ", ... (" + std::to_string(names.size()) + " in all)";
+  return out;
+}
+
+// Whether each surface of the mesh is kept by the selection. Throws for a
+// name the mesh has no surface of.
+std::vector<bool> keptSurfaces(const std::vector<std::string>& names,
+                               const CleanSettings& settings) {
+  const bool only = !settings.onlySurfaces.empty();
+  std::vector<bool> kept(names.size(), !only);
+  for (const std::vector<std::string>* given : {&settings.dropSurfaces, &settings.onlySurfaces})
+    for (const std::string& name : *given) {
+      const auto at = std::find(names.begin(), names.end(), name);
+      if (at == names.end())
+        throw CompileError("no surface (material) is named '" + name + "' (given to " +
+                           (given == &settings.onlySurfaces ? "--only-surface" : "--drop-surface") +
+                           "); the surfaces are " + someNames(names));
+      for (auto it = at; it != names.end(); it = std::find(it + 1, names.end(), name))
+        kept[it - names.begin()] = only;
+    }
+  return kept;
+}
+
 std::string shortNumber(double value) {
   std::ostringstream out;
   out << value;
@@ -123,11 +155,26 @@ Mesh cleanMesh(const Mesh& mesh, const CleanSettings& settings, CleanReport& rep
   const std::vector<std::uint32_t> target = weld(rounded, settings.weldTolerance);
   for (std::uint32_t i = 0; i < target.size(); ++i) report.weldedVertices += target[i] != i;
 
+  const std::vector<std::string> names = surfaceNames(mesh);
+  if (!mesh.triangleSurfaces.empty() && mesh.triangleSurfaces.size() != mesh.triangles.size())
+    throw CompileError("the mesh's triangle surfaces and triangles differ in number");
+  const std::vector<bool> keep = keptSurfaces(names, settings);
+  // Old surface index -> index in out.surfaces, in the order of first use.
+  std::vector<std::uint32_t> newSurface(names.size(), std::numeric_limits<std::uint32_t>::max());
+  std::unordered_map<std::string, std::uint32_t> surfaceByName;
+
   Mesh out;
   std::vector<std::uint32_t> newIndex(rounded.size(), std::numeric_limits<std::uint32_t>::max());
   std::unordered_set<std::array<std::uint32_t, 3>, TriangleHash> seen;
   seen.reserve(mesh.triangles.size());
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const std::uint32_t surface = mesh.triangleSurfaces.empty() ? 0 : mesh.triangleSurfaces[t];
+    if (surface >= names.size())
+      throw CompileError("triangle " + std::to_string(t) + " has a surface index out of range");
+    if (!keep[surface]) {
+      ++report.droppedBySurface;
+      continue;
+    }
     std::array<std::uint32_t, 3> tri;
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t v = mesh.triangles[t][k];
@@ -169,9 +216,30 @@ Mesh cleanMesh(const Mesh& mesh, const CleanSettings& settings, CleanReport& rep
       kept[k] = index;
     }
     out.triangles.push_back(kept);
+    std::uint32_t& renumbered = newSurface[surface];
+    if (renumbered == std::numeric_limits<std::uint32_t>::max()) {
+      // Surfaces of one name (a mesh made in memory may repeat one) merge.
+      const auto [at, added] = surfaceByName.try_emplace(
+          names[surface], static_cast<std::uint32_t>(out.surfaces.size()));
+      if (added) out.surfaces.push_back(names[surface]);
+      renumbered = at->second;
+    }
+    out.triangleSurfaces.push_back(renumbered);
   }
+  // The blob's surface ids are 16-bit.
+  if (out.surfaces.size() > 65536)
+    throw CompileError("more than 65536 surfaces (materials): " +
+                       std::to_string(out.surfaces.size()) + " (merge materials)");
   report.outputVertices = static_cast<std::uint32_t>(out.vertices.size());
   report.outputTriangles = static_cast<std::uint32_t>(out.triangles.size());
+  if (out.triangles.empty() && report.droppedBySurface == report.inputTriangles)
+    throw CompileError("no triangle is left: the surface selection left out all " +
+                       std::to_string(report.inputTriangles) + " triangles");
+  if (out.triangles.empty() && report.droppedBySurface > 0)
+    throw CompileError("no triangle is left: the surface selection left out " +
+                       std::to_string(report.droppedBySurface) + " of " +
+                       std::to_string(report.inputTriangles) +
+                       " triangles, and cleaning dropped the rest");
   if (out.triangles.empty())
     throw CompileError("no triangle is left after cleaning (" +
                        std::to_string(report.inputTriangles) + " degenerate or zero-area)");

@@ -246,6 +246,7 @@ std::string toJson(const CompileReport& r) {
       << ",\"dropped_degenerate\":" << r.clean.droppedDegenerate
       << ",\"dropped_zero_area\":" << r.clean.droppedZeroArea
       << ",\"dropped_duplicate\":" << r.clean.droppedDuplicate
+      << ",\"dropped_by_surface\":" << r.clean.droppedBySurface
       << ",\"output_vertices\":" << r.clean.outputVertices
       << ",\"output_triangles\":" << r.clean.outputTriangles << "},"
       << "\"edges\":{\"dropped_covered\":" << r.edges.droppedCovered << ",\"open\":" << r.edges.open

@@ -334,6 +334,10 @@ Mesh dropCoveredFaces(const Mesh& mesh, EdgeReport& report) {
     }
     out.triangles.push_back(kept);
   }
+  std::vector<bool> keep(n);
+  for (std::uint32_t t = 0; t < n; ++t) keep[t] = !drop[t];
+  carrySurfaces(mesh, keep, out);
+  out.warnings = mesh.warnings;
   return out;
 }
 

@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <string_view>
 #include <utility>
@@ -59,7 +60,20 @@ bool readAsCollada(const aiScene& scene) {
 // mirrors (negative determinant, as an FBX negative scale makes) turns a
 // triangle inside out: it is written with two corners swapped, so it faces
 // the way its mirrored surface does.
+// The surface name of a mesh's material: its name, or kDefaultSurface for a
+// mesh without one (assimp's own default material, an unnamed one).
+std::string surfaceName(const aiScene& scene, const aiMesh& mesh) {
+  if (mesh.mMaterialIndex >= scene.mNumMaterials || !scene.mMaterials[mesh.mMaterialIndex])
+    return kDefaultSurface;
+  aiString name;
+  if (scene.mMaterials[mesh.mMaterialIndex]->Get(AI_MATKEY_NAME, name) != AI_SUCCESS)
+    return kDefaultSurface;
+  const std::string text(name.C_Str(), name.length);
+  return text.empty() || text == AI_DEFAULT_MATERIAL_NAME ? kDefaultSurface : text;
+}
+
 void appendScene(const aiScene& scene, const Eigen::Matrix4d& root, Mesh& out) {
+  std::map<std::string, std::uint32_t> surfaceIds;  // name -> index in out.surfaces
   std::vector<std::pair<const aiNode*, Eigen::Matrix4d>> pending{{scene.mRootNode, root}};
   while (!pending.empty()) {
     const auto [node, parent] = pending.back();
@@ -70,6 +84,10 @@ void appendScene(const aiScene& scene, const Eigen::Matrix4d& root, Mesh& out) {
       const aiMesh& mesh = *scene.mMeshes[node->mMeshes[i]];
       if (!(mesh.mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
       const auto base = static_cast<std::uint32_t>(out.vertices.size());
+      const auto [named, added] = surfaceIds.try_emplace(
+          surfaceName(scene, mesh), static_cast<std::uint32_t>(out.surfaces.size()));
+      if (added) out.surfaces.push_back(named->first);
+      const std::uint32_t surface = named->second;
       for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
         const aiVector3D& p = mesh.mVertices[v];
         const Eigen::Vector4d q = transform * Eigen::Vector4d(p.x, p.y, p.z, 1.0);
@@ -81,6 +99,7 @@ void appendScene(const aiScene& scene, const Eigen::Matrix4d& root, Mesh& out) {
         const std::uint32_t second = face.mIndices[mirrors ? 2 : 1];
         const std::uint32_t third = face.mIndices[mirrors ? 1 : 2];
         out.triangles.push_back({base + face.mIndices[0], base + second, base + third});
+        out.triangleSurfaces.push_back(surface);
       }
     }
     for (unsigned c = node->mNumChildren; c-- > 0;)

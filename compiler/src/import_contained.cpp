@@ -21,6 +21,7 @@
 #include <new>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 #define BSPC_SANITIZED 1
@@ -59,6 +60,18 @@ bool writeAll(int fd, const void* data, std::size_t size) {
     if (n <= 0) return false;
     at += n;
     size -= static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+// A count, then each text as a length and its bytes.
+bool sendTexts(int fd, const std::vector<std::string>& texts) {
+  const auto count = static_cast<std::uint32_t>(texts.size());
+  if (!writeAll(fd, &count, sizeof count)) return false;
+  for (const std::string& text : texts) {
+    const auto length = static_cast<std::uint32_t>(text.size());
+    if (!writeAll(fd, &length, sizeof length) || !writeAll(fd, text.data(), text.size()))
+      return false;
   }
   return true;
 }
@@ -103,15 +116,15 @@ void sendMessage(int fd, Reply kind, const std::string& text) {
         !writeAll(fd, mesh.vertices.data(), mesh.vertices.size() * sizeof(Eigen::Vector3d)) ||
         !writeAll(fd, mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0])))
       status = 1;
-    // Then the import's warnings: a count, and each as a length and text.
-    const auto warningCount = static_cast<std::uint32_t>(mesh.warnings.size());
-    if (status == 0 && !writeAll(fd, &warningCount, sizeof warningCount)) status = 1;
-    for (const std::string& warning : mesh.warnings) {
-      const auto length = static_cast<std::uint32_t>(warning.size());
-      if (status == 0 &&
-          (!writeAll(fd, &length, sizeof length) || !writeAll(fd, warning.data(), warning.size())))
-        status = 1;
-    }
+    // Then each triangle's surface, the surface names and the import's
+    // warnings, each list as a count, and each text as a length and bytes.
+    const auto surfaceIds = static_cast<std::uint64_t>(mesh.triangleSurfaces.size());
+    if (status == 0 &&
+        (!writeAll(fd, &surfaceIds, sizeof surfaceIds) ||
+         !writeAll(fd, mesh.triangleSurfaces.data(), surfaceIds * sizeof(std::uint32_t))))
+      status = 1;
+    if (status == 0 && !sendTexts(fd, mesh.surfaces)) status = 1;
+    if (status == 0 && !sendTexts(fd, mesh.warnings)) status = 1;
   } catch (const CompileError& e) {
     // assimp turns an exception inside an importer into its error string.
     const bool memory = std::string_view(e.what()).find("bad_alloc") != std::string_view::npos;
@@ -163,6 +176,21 @@ class Child {
       at += n;
       size -= static_cast<std::size_t>(n);
     }
+  }
+
+  // A count (at most `most`), then each text as a length and its bytes.
+  std::vector<std::string> readTexts(std::uint64_t most) {
+    std::uint32_t count = 0;
+    read(&count, sizeof count);
+    if (count > most) throw CompileError("the importer sent a malformed reply");
+    std::vector<std::string> texts;
+    for (std::uint32_t k = 0; k < count; ++k) {
+      std::uint32_t length = 0;
+      read(&length, sizeof length);
+      if (length > (1u << 20)) throw CompileError("the importer sent a malformed reply");
+      read(texts.emplace_back(length, '\0').data(), length);
+    }
+    return texts;
   }
 
   // Reaps a child that has sent its whole reply; throws when it then failed.
@@ -272,16 +300,15 @@ Mesh importMeshContained(const std::filesystem::path& path, const ImportSettings
   mesh.triangles.resize(header.triangles);
   child.read(mesh.vertices.data(), mesh.vertices.size() * sizeof(Eigen::Vector3d));
   child.read(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));
-  std::uint32_t warningCount = 0;
-  child.read(&warningCount, sizeof warningCount);
-  if (warningCount > 1024) throw CompileError("the importer sent a malformed reply");
-  for (std::uint32_t k = 0; k < warningCount; ++k) {
-    std::uint32_t length = 0;
-    child.read(&length, sizeof length);
-    if (length > (1u << 20)) throw CompileError("the importer sent a malformed reply");
-    std::string& warning = mesh.warnings.emplace_back(length, '\0');
-    child.read(warning.data(), warning.size());
-  }
+  std::uint64_t surfaceIds = 0;
+  child.read(&surfaceIds, sizeof surfaceIds);
+  if (surfaceIds != 0 && surfaceIds != header.triangles)
+    throw CompileError("the importer sent a malformed reply");
+  mesh.triangleSurfaces.resize(surfaceIds);
+  child.read(mesh.triangleSurfaces.data(), surfaceIds * sizeof(std::uint32_t));
+  // A surface per mesh of the scene at most: no more than its triangles.
+  mesh.surfaces = child.readTexts(header.triangles + 1);
+  mesh.warnings = child.readTexts(1024);
   child.finish();
   return mesh;
 }

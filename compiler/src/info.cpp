@@ -3,6 +3,7 @@
 
 #include <iomanip>
 #include <sstream>
+#include <vector>
 
 namespace bspc {
 
@@ -42,6 +43,8 @@ std::string describeWorld(const bspf::World& world, const std::string& fileName)
                      << build->dropped_degenerate() << " degenerate, " << build->dropped_zero_area()
                      << " zero-area, " << build->dropped_duplicate()
                      << " duplicate triangles dropped\n";
+    if (build->dropped_by_surface() > 0)
+      line("surface selection") << build->dropped_by_surface() << " triangles left out\n";
   }
   line("triangles") << world.triangles().size() << "\n";
   line("vertices") << world.vertices().size() << "\n";
@@ -51,6 +54,14 @@ std::string describeWorld(const bspf::World& world, const std::string& fileName)
   line("triangles per leaf") << "max " << tree.trianglesPerLeafMax << ", mean "
                              << tree.trianglesPerLeafMean << "\n";
   line("references per tri") << tree.referencesPerTriangle << "\n";
+  // The surface table: id, triangles, name (quoted: a name may hold spaces).
+  std::vector<std::uint32_t> counts(world.surfaceCount(), 0);
+  for (const std::uint16_t surface : world.triangleSurfaces()) ++counts[surface];
+  line("surfaces") << world.surfaceCount() << " (id, triangles, name)\n";
+  for (std::uint32_t id = 0; id < world.surfaceCount(); ++id)
+    out << "  " << std::right << std::setw(5) << id << std::setw(10) << counts[id] << "  \""
+        << world.surfaceName(id) << "\"\n"
+        << std::left;
   line("size") << world.bytes().size() << " bytes, " << tree.bytesPerTriangle << " per triangle\n";
   return out.str();
 }

@@ -269,6 +269,7 @@ Mesh dropUnreachableFaces(const Mesh& mesh, const ReachSettings& settings, Reach
     const auto& tri = mesh.triangles[t];
     kept.triangles.push_back({newIndex[tri[0]], newIndex[tri[1]], newIndex[tri[2]]});
   }
+  carrySurfaces(mesh, keep, kept);
   report.applied = true;
   report.dropped = mesh.triangles.size() - kept.triangles.size();
   report.cells = grid.count();

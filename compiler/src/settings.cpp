@@ -42,6 +42,8 @@ void validate(const CompileSettings& s) {
           "weld tolerance must be >= 0 and < 1 m");
   require(std::isfinite(s.clean.minTriangleArea) && s.clean.minTriangleArea >= 0,
           "minimum triangle area must be >= 0");
+  require(s.clean.dropSurfaces.empty() || s.clean.onlySurfaces.empty(),
+          "surfaces to drop and surfaces to keep only cannot both be given");
   require(s.tree.maxLeafTriangles >= 1 && s.tree.maxLeafTriangles <= 4096,
           "max leaf triangles must be 1 to 4096");
   require(s.tree.maxDepth >= 1 && s.tree.maxDepth <= bspf::kMaxTreeDepth,
@@ -86,6 +88,9 @@ std::string describeOptions(const CompileSettings& s) {
   if (!s.reach.from.empty())
     out << " reach-points=" << s.reach.from.size() << " body-radii=" << s.reach.radiusXZ << ","
         << s.reach.radiusY;
+  // Only when given, so the line of a compile without them is unchanged.
+  for (const std::string& name : s.clean.dropSurfaces) out << " drop-surface=" << name;
+  for (const std::string& name : s.clean.onlySurfaces) out << " only-surface=" << name;
   return out.str();
 }
 

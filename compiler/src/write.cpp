@@ -71,6 +71,12 @@ std::vector<std::uint8_t> serializeWorld(const Mesh& mesh,
     leafBounds.emplace_back(fb::Vec3(boxLow.x(), boxLow.y(), boxLow.z()),
                             fb::Vec3(boxHigh.x(), boxHigh.y(), boxHigh.z()));
   }
+  // The surfaces as cleanMesh left them (a mesh without any: one, the default).
+  std::vector<std::uint16_t> triangleSurfaces(mesh.triangles.size(), 0);
+  for (std::size_t t = 0; t < mesh.triangleSurfaces.size() && t < triangleSurfaces.size(); ++t)
+    triangleSurfaces[t] = static_cast<std::uint16_t>(mesh.triangleSurfaces[t]);
+  const std::vector<std::string> surfaceNames =
+      mesh.surfaces.empty() ? std::vector<std::string>{kDefaultSurface} : mesh.surfaces;
   flatbuffers::FlatBufferBuilder fbb(1024 + mesh.triangles.size() * 160);
   fbb.ForceDefaults(true);
   const CleanReport& clean = metadata.clean;
@@ -80,7 +86,7 @@ std::vector<std::uint8_t> serializeWorld(const Mesh& mesh,
       toSchema(metadata.settings.import.up), static_cast<float>(metadata.settings.import.scale),
       clean.inputTriangles, clean.inputVertices, clean.weldedVertices, clean.droppedDegenerate,
       clean.droppedZeroArea, clean.droppedDuplicate, metadata.settings.tree.maxLeafTriangles,
-      metadata.settings.tree.maxDepth);
+      metadata.settings.tree.maxDepth, clean.droppedBySurface);
   const fb::Vec3 boundsMin(low.x(), low.y(), low.z());
   const fb::Vec3 boundsMax(high.x(), high.y(), high.z());
   const auto world =
@@ -88,7 +94,8 @@ std::vector<std::uint8_t> serializeWorld(const Mesh& mesh,
                       fbb.CreateVectorOfStructs(vertices), fbb.CreateVectorOfStructs(triangles),
                       fbb.CreateVectorOfStructs(planes), fbb.CreateVectorOfStructs(tree.nodes),
                       fbb.CreateVectorOfStructs(tree.leaves), fbb.CreateVector(tree.leafTriangles),
-                      tree.root, tree.depth, fbb.CreateVectorOfStructs(leafBounds));
+                      tree.root, tree.depth, fbb.CreateVectorOfStructs(leafBounds),
+                      fbb.CreateVectorOfStrings(surfaceNames), fbb.CreateVector(triangleSurfaces));
   fbb.FinishSizePrefixed(world, bspf::kFileIdentifier);
   return {fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()};
 }
@@ -127,8 +134,8 @@ std::uint64_t estimateBlobBytes(std::uint64_t vertices, std::uint64_t triangles,
   namespace fb = bspf::schema;
   // The arrays and their 4-byte lengths; the tables, the size prefix and the
   // build info's strings come on top.
-  return 8 * 4 + vertices * sizeof(fb::Vec3) +
-         triangles * (sizeof(fb::Triangle) + sizeof(fb::TrianglePlanes)) +
+  return 9 * 4 + vertices * sizeof(fb::Vec3) +
+         triangles * (sizeof(fb::Triangle) + sizeof(fb::TrianglePlanes) + sizeof(std::uint16_t)) +
          nodes * sizeof(fb::Node) + leaves * sizeof(fb::Leaf) +
          entries * (sizeof(std::uint32_t) + sizeof(fb::Box));
 }

@@ -359,6 +359,13 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
       largest = std::max(largest, share);
       const float closing = body.velocity.dot(away);
       if (closing < 0) body.velocity -= closing * away;
+      if (!reports.empty() && reports[i].contactCount < kMaxReportedContacts) {
+        StepReport& report = reports[i];
+        const int c = report.contactCount++;
+        report.contactNormals[c] = away;
+        report.contactPoints[c] = body.position - body.radii.xz * away;  // `away` is level
+        report.contactTriangles[c] = report.contactSurfaces[c] = kBodyContact;
+      }
     }
     // Never longer than the largest share: the shares of pushers on one side
     // add up, and bodies spawned at one point flung each other up to 3 m in
@@ -379,7 +386,7 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
                             walkableNormalY(body.settings), scratch);
       swapBodyCache(scratch, caches[i]);
       body.position = slide.end;
-      recordSlide(reports.empty() ? nullptr : &reports[i], slide, false);
+      recordSlide(world, reports.empty() ? nullptr : &reports[i], slide, false);
     } else {
       body.position = end;
     }

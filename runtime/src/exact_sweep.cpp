@@ -185,9 +185,11 @@ Vec3 worldNormal(const Vec3& sphereNormal, const Vec3& toSphere) {
   return sphereNormal.cwiseProduct(toSphere).normalized();
 }
 
-void addContact(SlideResult& result, const Vec3& normal, float walkableNormalY, bool edge = false) {
+void addContact(SlideResult& result, const Vec3& normal, float walkableNormalY, bool edge,
+                const Vec3& point, std::uint32_t triangle) {
   if (result.contactCount < kMaxReportedContacts)
-    result.contacts[result.contactCount++] = {normal, normal.y() >= walkableNormalY, edge};
+    result.contacts[result.contactCount++] = {normal, normal.y() >= walkableNormalY, edge, point,
+                                              triangle};
 }
 
 // Pushes a centre that starts within the unit distance of triangles (in
@@ -207,15 +209,18 @@ void recoverFromPenetration(const World& world, Vec3& p, const Vec3& toSphere, f
     for (const detail::CandidateBlock& block :
          local.around(world, here, moveLength, radii, scratch)) {
       for (std::uint32_t bits = detail::boxMask(block, here); bits != 0; bits &= bits - 1) {
-        const Triangle& tri = local.sphere(block.slot[std::countr_zero(bits)]);
+        const std::uint32_t slot = block.slot[std::countr_zero(bits)];
+        const Triangle& tri = local.sphere(slot);
         if (tri.normal.dot(p - tri.a) < 0) continue;
-        const Vec3 offset = p - closestPointOnTriangle<Vec3>(p, tri.a, tri.b, tri.c);
+        const Vec3 closest = closestPointOnTriangle<Vec3>(p, tri.a, tri.b, tri.c);
+        const Vec3 offset = p - closest;
         const float distance = offset.norm();
         if (distance >= 1) continue;  // within the padding is not penetration
         const Vec3 away = distance > 1e-6f ? Vec3(offset / distance) : tri.normal;
         p += away * (1 + padding - distance);
         pushed = true;
-        addContact(result, worldNormal(away, toSphere), walkableNormalY);
+        addContact(result, worldNormal(away, toSphere), walkableNormalY, false,
+                   closest.cwiseQuotient(toSphere), local[slot].triangle);
       }
     }
     if (!pushed) return;
@@ -249,6 +254,7 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     const Vec3 to = (p + move).cwiseQuotient(toSphere);
     const Bounds swept = sweptBounds(from, to, radii);
     Impact impact;
+    std::uint32_t impactSlot = 0;  // the candidate `impact` is with
     bool penetrating = false;
     // The face stage for every candidate the box and the side-value
     // pre-check keep (a path that stays more than the body's extent in
@@ -263,12 +269,18 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
       for (std::uint32_t bits = detail::exactMask(block, swept, from, to); bits != 0;
            bits &= bits - 1) {
         const std::uint32_t slot = block.slot[std::countr_zero(bits)];
+        const float before = impact.time;  // every new impact is earlier
         const double earliest = faceImpact(local.sphereD(slot), path, impact, penetrating);
+        if (impact.time != before) impactSlot = slot;
         if (earliest < 1) open.push_back({earliest, slot});
       }
     }
     for (const auto& [earliest, slot] : open)
-      if (earliest < impact.time) edgeImpact(local.sphereD(slot), path, impact);
+      if (earliest < impact.time) {
+        const float before = impact.time;
+        edgeImpact(local.sphereD(slot), path, impact);
+        if (impact.time != before) impactSlot = slot;
+      }
     // A start in penetration (pushed there by another body, or placed there)
     // is first moved out, then the sweep is made again from there.
     if (penetrating && iteration == 0 && !recovered) {
@@ -290,6 +302,7 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     // contact normal (stepping back along the velocity, as the well-known
     // write-ups do, leaves a grazing body inside the padding).
     p += impact.time * move;
+    const Vec3 touched = (p - impact.normal).cwiseQuotient(toSphere);
     const Vec3 normal = worldNormal(impact.normal, toSphere);
     const bool walkable = normal.y() >= walkableNormalY;
     // On walkable ground the gap is made straight up: along a slope's normal
@@ -339,7 +352,7 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     if (planeCount < int(planes.size())) planes[planeCount++] = normal;
     move = rest.cwiseProduct(toSphere);
     ++result.iterations;
-    addContact(result, normal, walkableNormalY, impact.edge);
+    addContact(result, normal, walkableNormalY, impact.edge, touched, local[impactSlot].triangle);
   }
   result.end = p.cwiseQuotient(toSphere);
   return result;

@@ -40,16 +40,6 @@ SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3&
              : slideWithPlanes(world, start, desiredEnd, radii, settings, walkableNormalY, scratch);
 }
 
-void recordSlide(StepReport* report, const SlideResult& slide, bool ownMove) {
-  if (!report) return;
-  if (ownMove) {
-    report->iterations += slide.iterations;
-    report->refused = report->refused || slide.refused;
-  }
-  for (int i = 0; i < slide.contactCount && report->contactCount < kMaxReportedContacts; ++i)
-    report->contactNormals[report->contactCount++] = slide.contacts[i].normal;
-}
-
 namespace {
 
 // How far a slide got along the horizontal direction of `move`, metres.
@@ -174,9 +164,15 @@ void tryStepUp(const World& world, const Body& body, const Vec3& start, const Ve
     for (int i = 0; i < part->contactCount && stepped.contactCount < kMaxReportedContacts; ++i)
       if (part != &down || !onStepEdge)
         stepped.contacts[stepped.contactCount++] = part->contacts[i];
-  // Standing on the step's edge counts as standing on the step.
-  if (onStepEdge && stepped.contactCount < kMaxReportedContacts)
-    stepped.contacts[stepped.contactCount++] = {Vec3::UnitY(), true};
+  // Standing on the step's edge counts as standing on the step (the edge's
+  // triangle and point, ground's normal).
+  if (onStepEdge && stepped.contactCount < kMaxReportedContacts) {
+    Contact standing = *std::find_if(down.contacts.begin(), down.contacts.end(),
+                                     [](const Contact& c) { return c.edge && c.normal.y() > 0; });
+    standing.normal = Vec3::UnitY();
+    standing.walkable = true;
+    stepped.contacts[stepped.contactCount++] = standing;
+  }
   slide = stepped;
 }
 
@@ -277,8 +273,9 @@ InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt
   detail::respondToContacts(body, slide, dt);
   body.grounded = anyWalkable(slide);
   if (report) {
-    recordSlide(report, slide, true);
+    recordSlide(world, report, slide, true);
     report->grounded = body.grounded;
+    report->belowLevel = body.position.y() + body.radii.y < world.boundsMin().y();
   }
   return InvalidInput::None;
 }

@@ -25,6 +25,7 @@ struct Hit {
   float facing = 0;
   Vec3 normal = Vec3::Zero();
   float distance = 0;
+  float reach = 0;  // effectiveRadius(normal, radii), from the candidate's block
   bool found() const { return triangle != kNone; }
 };
 
@@ -79,7 +80,7 @@ Hit findBlockingTriangle(const World& world, const Vec3& start, const Vec3& end,
       const float facing = normal.dot(direction);
       const std::uint32_t t = candidate.triangle;
       if (!best.found() || facing < best.facing || (facing == best.facing && t < best.triangle))
-        best = Hit{t, facing, normal, block.distance[lane]};
+        best = Hit{t, facing, normal, block.distance[lane], block.reach[lane]};
     }
   }
   return best;
@@ -202,7 +203,7 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
     }
     const Vec3& normal = hit.normal;
     const bool walkable = normal.y() >= walkableNormalY;
-    const Constraint added{normal, hit.distance + effectiveRadius(normal, radii) + settings.skin,
+    const Constraint added{normal, hit.distance + hit.reach + settings.skin,
                            walkable ? Vec3::UnitY() : normal};
     result.end += added.push * (violation(added, result.end) / normal.dot(added.push));
 
@@ -225,7 +226,9 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
     if (constraintCount < kMaxReportedContacts) constraints[constraintCount++] = added;
     ++result.iterations;
     if (result.contactCount < kMaxReportedContacts)
-      result.contacts[result.contactCount++] = {normal, walkable};
+      result.contacts[result.contactCount++] = {normal, walkable, false,
+                                                touchingPoint(result.end, normal, hit.reach, radii),
+                                                hit.triangle};
   }
 }
 

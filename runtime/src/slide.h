@@ -22,7 +22,21 @@ struct Contact {
   /// Met on a triangle's edge or corner, not its face (the exact sweep's
   /// rounded contacts; the planes method meets faces only).
   bool edge = false;
+  /// Where the body touched (StepReport::contactPoints), metres, world.
+  Vec3 point;
+  /// The triangle met (StepReport::contactTriangles).
+  std::uint32_t triangle;
 };
+
+/// The point of the ellipsoid at `centre` whose outward normal is -normal:
+/// where it touches a surface of unit normal `normal` (the planes method's
+/// contact point; the exact sweep's is the same point, found in sphere
+/// space). `reach` is effectiveRadius(normal, radii).
+inline Vec3 touchingPoint(const Vec3& centre, const Vec3& normal, float reach,
+                          EllipsoidRadii radii) {
+  const Vec3 squared(radii.xz * radii.xz, radii.y * radii.y, radii.xz * radii.xz);
+  return centre - squared.cwiseProduct(normal) * (1 / reach);
+}
 
 struct SlideResult {
   Vec3 end;
@@ -158,6 +172,21 @@ inline float walkableNormalY(const MovementSettings& s) {
 /// Adds a slide's figures to `report` (if any). Pushes between bodies add
 /// their contacts but not their iterations or refusals: those describe the
 /// body's own move.
-void recordSlide(StepReport* report, const SlideResult& slide, bool ownMove);
+inline void recordSlide(const World& world, StepReport* report, const SlideResult& slide,
+                        bool ownMove) {
+  if (!report) return;
+  if (ownMove) {
+    report->iterations += slide.iterations;
+    report->refused = report->refused || slide.refused;
+  }
+  for (int i = 0; i < slide.contactCount && report->contactCount < kMaxReportedContacts; ++i) {
+    const Contact& contact = slide.contacts[i];
+    const int k = report->contactCount++;
+    report->contactNormals[k] = contact.normal;
+    report->contactPoints[k] = contact.point;
+    report->contactTriangles[k] = contact.triangle;
+    report->contactSurfaces[k] = world.triangleSurfaces()[contact.triangle];
+  }
+}
 
 }  // namespace bspf

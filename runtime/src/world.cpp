@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
+#include <cassert>
 #include <cmath>
 #include <cstring>
 #include <vector>
@@ -33,6 +34,23 @@ std::span<const std::uint32_t> World::leafTriangleList(std::uint32_t leafIndex) 
   return leafTriangles_.subspan(leaf.first(), leaf.count());
 }
 
+std::uint32_t World::triangleSurface(std::uint32_t triangle) const {
+  assert(triangle < triangleSurfaces_.size());
+  return triangleSurfaces_[triangle];
+}
+
+std::string_view World::surfaceName(std::uint32_t surface) const {
+  assert(surface < surfaceCount_);
+  return root_table_->surfaces()->Get(surface)->string_view();
+}
+
+std::optional<std::uint32_t> World::findSurface(std::string_view name) const {
+  const auto* names = root_table_->surfaces();
+  for (std::uint32_t i = 0; i < surfaceCount_; ++i)
+    if (names->Get(i)->string_view() == name) return i;
+  return std::nullopt;
+}
+
 struct WorldAccess {
   static void set(World& w, std::shared_ptr<const void> owner, std::span<const std::byte> bytes,
                   const schema::World* table, std::uint32_t depth) {
@@ -51,6 +69,9 @@ struct WorldAccess {
     const auto* lt = table->leaf_triangles();
     w.leafTriangles_ = {lt->data(), lt->size()};
     w.leafTriangleBounds_ = structs(table->leaf_triangle_bounds());
+    const auto* surfaces = table->triangle_surfaces();
+    w.triangleSurfaces_ = {surfaces->data(), surfaces->size()};
+    w.surfaceCount_ = table->surfaces()->size();
   }
   template <typename T>
   static std::span<const T> structs(const flatbuffers::Vector<const T*>* v) {
@@ -130,6 +151,26 @@ bool checkGeometry(const schema::World& w, Checker& check) {
           !check.plane(*p.caps()->Get(k), "cap plane of triangle", i))
         return false;
   }
+  return true;
+}
+
+// The surface table and each triangle's id into it (docs/format.md,
+// "Surfaces"). Ids are 16-bit: a table of more than 65536 names could never
+// be used in full.
+bool checkSurfaces(const schema::World& w, Checker& check) {
+  const auto* names = w.surfaces();
+  const auto* ids = w.triangle_surfaces();
+  if (!names || !ids) return check.fail("the surface table or triangle_surfaces is missing");
+  if (names->size() == 0 || names->size() > 65536)
+    return check.fail("the surface table has " + std::to_string(names->size()) +
+                      " names (1 to 65536 allowed)");
+  if (ids->size() != w.triangles()->size())
+    return check.fail("triangle_surfaces and triangles differ in length");
+  for (flatbuffers::uoffset_t i = 0; i < names->size(); ++i)
+    if (!names->Get(i)) return check.fail("surface name " + std::to_string(i) + " is missing");
+  for (flatbuffers::uoffset_t i = 0; i < ids->size(); ++i)
+    if (ids->Get(i) >= names->size())
+      return check.fail("triangle " + std::to_string(i) + " has a surface id out of range");
   return true;
 }
 
@@ -346,8 +387,8 @@ OpenResult verifyAndView(std::span<const std::byte> bytes, std::shared_ptr<const
   std::string why;
   Checker check(why);
   std::uint32_t depth = 0;
-  if (!checkGeometry(*table, check) || !checkTree(*table, check, depth) ||
-      !checkStepSafety(*table, check))
+  if (!checkGeometry(*table, check) || !checkSurfaces(*table, check) ||
+      !checkTree(*table, check, depth) || !checkStepSafety(*table, check))
     return refuse(LoadStatus::Malformed, name, "malformed: " + why);
 
   OpenResult r;

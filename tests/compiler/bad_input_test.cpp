@@ -20,21 +20,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string quoted(const fs::path& path) {
-  std::string out = "'";
-  for (const char c : path.string()) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
-bspf::test::CommandResult runBspc(const std::string& arguments) {
-  return bspf::test::run(quoted(bspf::test::bspcExecutable()) + " " + arguments);
-}
-
-void writeText(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  REQUIRE(out);
-}
+using bspf::test::quoted;
+using bspf::test::runBspc;
+using bspf::test::writeText;
 
 std::vector<char> readBytes(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);

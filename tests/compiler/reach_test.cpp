@@ -222,3 +222,18 @@ TEST_CASE("bodies move bit for bit the same with and without the faces --reach-f
     CHECK(differing == 0);
   }
 }
+
+TEST_CASE("the faces --reach-from keeps keep their surfaces, and a surface left unused goes",
+          "[compiler][reach][surfaces]") {
+  bspc::Mesh mesh = room();
+  mesh.surfaces = {"stone", "lava"};
+  mesh.triangleSurfaces.assign(mesh.triangles.size(), 0);
+  append(mesh, boxMesh({10, 0, 0}, {11, 1, 1}));
+  mesh.triangleSurfaces.resize(mesh.triangles.size(), 1);  // the box outside
+  bspc::ReachReport report;
+  std::vector<std::string> warnings;
+  const bspc::Mesh kept =
+      bspc::dropUnreachableFaces(mesh, reachFrom({3, 1.5, 3}), report, warnings);
+  CHECK(kept.surfaces == std::vector<std::string>{"stone"});
+  CHECK(kept.triangleSurfaces == std::vector<std::uint32_t>(kept.triangles.size(), 0));
+}

@@ -98,7 +98,7 @@ std::vector<bspf::Body> bodiesNearTriangles(const bspf::World& world,
   return bodies;
 }
 
-void checkBodies(const std::vector<bspf::Body>& bodies,
+void checkBodies(const bspf::World& world, const std::vector<bspf::Body>& bodies,
                  const std::vector<bspf::StepReport>& reports) {
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     require(finite(bodies[i].position), "a stepped body's position stays finite");
@@ -107,6 +107,19 @@ void checkBodies(const std::vector<bspf::Body>& bodies,
     require(reports[i].invalidInput == bspf::InvalidInput::None, "a valid body is stepped");
     require(reports[i].contactCount >= 0 && reports[i].contactCount <= bspf::kMaxReportedContacts,
             "a report's contact count is within its array");
+    for (int c = 0; c < reports[i].contactCount; ++c) {
+      const std::uint32_t t = reports[i].contactTriangles[c];
+      const std::uint32_t surface = reports[i].contactSurfaces[c];
+      require(finite(reports[i].contactPoints[c]), "a contact point is finite");
+      if (t == bspf::kBodyContact) {
+        require(surface == bspf::kBodyContact, "a body contact has the body's surface sentinel");
+        continue;
+      }
+      require(t < world.triangles().size(), "a contact's triangle is in range");
+      require(surface == world.triangleSurface(t), "a contact's surface is its triangle's");
+      require(surface < world.surfaceCount(), "a contact's surface is in range");
+      (void)world.surfaceName(surface);
+    }
   }
 }
 
@@ -119,7 +132,7 @@ void checkSteps(const bspf::World& world, bspf::CollisionMethod method) {
   for (int frame = 0; frame < kFrames; ++frame) {
     for (std::size_t i = 0; i < bodies.size(); ++i)
       bspf::stepBody(world, bodies[i], force, kDt, scratch, &reports[i]);
-    checkBodies(bodies, reports);
+    checkBodies(world, bodies, reports);
   }
   // As a crowd: the level phase, then the body phase pushing them apart.
   // Everyone at the first body's place, so they overlap.
@@ -130,7 +143,7 @@ void checkSteps(const bspf::World& world, bspf::CollisionMethod method) {
   reports.assign(crowd.size(), {});
   for (int frame = 0; frame < kFrames; ++frame) {
     bspf::stepBodies(world, crowd, forces, kDt, scratch, reports);
-    checkBodies(crowd, reports);
+    checkBodies(world, crowd, reports);
   }
 }
 

@@ -159,6 +159,13 @@ struct Content {
   /// triangle's vertices (an empty box where an index is out of range).
   std::vector<schema::Box> leafBounds;
   bool omitLeafBounds = false;
+  /// Written as given; when empty, one surface "default".
+  std::vector<std::string> surfaces;
+  /// Written as given; when empty, surface 0 for every triangle.
+  std::vector<std::uint16_t> triangleSurfaces;
+  bool omitSurfaces = false;
+  /// Writes `surfaces` even when empty.
+  bool emptySurfaceTable = false;
 };
 
 // The bounding box of each leaf entry's triangle, as bspc writes it.
@@ -205,6 +212,9 @@ Content contentOf(const World& world) {
   c.leafBounds.assign(world.leafTriangleBounds().begin(), world.leafTriangleBounds().end());
   c.root = world.root();
   c.treeDepth = world.treeDepth();
+  for (std::uint32_t s = 0; s < world.surfaceCount(); ++s)
+    c.surfaces.emplace_back(world.surfaceName(s));
+  c.triangleSurfaces.assign(world.triangleSurfaces().begin(), world.triangleSurfaces().end());
   return c;
 }
 
@@ -232,9 +242,20 @@ Blob serialize(const Content& c) {
       c.omitLeafBounds
           ? flatbuffers::Offset<flatbuffers::Vector<const schema::Box*>>()
           : fbb.CreateVectorOfStructs(c.leafBounds.empty() ? leafBoundsOf(c) : c.leafBounds);
+  using Names = flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<flatbuffers::String>>>;
+  const auto names = c.omitSurfaces
+                         ? Names()
+                         : fbb.CreateVectorOfStrings(c.surfaces.empty() && !c.emptySurfaceTable
+                                                         ? std::vector<std::string>{"default"}
+                                                         : c.surfaces);
+  const auto ids = c.omitSurfaces
+                       ? flatbuffers::Offset<flatbuffers::Vector<std::uint16_t>>()
+                       : fbb.CreateVector(c.triangleSurfaces.empty()
+                                              ? std::vector<std::uint16_t>(c.triangles.size())
+                                              : c.triangleSurfaces);
   const auto world = schema::CreateWorld(
       fbb, c.formatVersion, c.metresPerUnit, c.upAxis, &c.boundsMin, &c.boundsMax, build, vertices,
-      triangles, planes, nodes, leaves, leafTriangles, c.root, c.treeDepth, leafBounds);
+      triangles, planes, nodes, leaves, leafTriangles, c.root, c.treeDepth, leafBounds, names, ids);
   fbb.FinishSizePrefixed(world, kFileIdentifier);
   return {fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()};
 }
@@ -1005,6 +1026,24 @@ TEST_CASE("Semantic violations are Malformed with a message saying what is wrong
       {"triangle_planes longer than triangles",
        [](Content& c) { c.planes.push_back(c.planes.front()); },
        "triangle_planes and triangles differ in length"},
+      {"a missing surface table and triangle_surfaces", [](Content& c) { c.omitSurfaces = true; },
+       "surface table or triangle_surfaces is missing"},
+      {"an empty surface table",
+       [](Content& c) {
+         c.surfaces.clear();
+         c.emptySurfaceTable = true;
+       },
+       "the surface table has 0 names"},
+      {"triangle_surfaces shorter than triangles",
+       [](Content& c) { c.triangleSurfaces.assign(c.triangles.size() - 1, 0); },
+       "triangle_surfaces and triangles differ in length"},
+      {"a surface id one past the table",
+       [](Content& c) {
+         c.surfaces = {"a", "b"};
+         c.triangleSurfaces.assign(c.triangles.size(), 1);
+         c.triangleSurfaces[3] = 2;
+       },
+       "triangle 3 has a surface id out of range"},
       {"no triangles",
        [](Content& c) {
          c.triangles.clear();

@@ -1182,3 +1182,176 @@ TEST_CASE("a body running up a walkable slope under a low ceiling never ends ins
   bspf::stepBody(level.world, body, Vec3::Zero(), kDt, scratch);
   REQUIRE(body.position.y() + 0.85f <= ceiling + 2e-3f);
 }
+
+// Contacts: what a StepReport says about each (its point, its triangle and
+// the triangle's surface, a sentinel for another body), and the flag a body
+// that fell out of the level raises.
+
+namespace {
+
+// A 40 m slab whose top is "grass" and whose other faces are "dirt", and a
+// wall (a box from x = 5 to 6) of "stone". boxMesh's triangles 6 and 7 are
+// its top.
+bspc::Mesh grassFloorWithWall() {
+  bspc::Mesh mesh = bspf::test::boxMesh({-20, -1, -20}, {20, 0, 20});
+  mesh.surfaces = {"dirt", "grass", "stone"};
+  mesh.triangleSurfaces.assign(12, 0);
+  mesh.triangleSurfaces[6] = mesh.triangleSurfaces[7] = 1;
+  bspf::test::append(mesh, bspf::test::boxMesh({5, 0, -20}, {6, 4, 20}));
+  mesh.triangleSurfaces.resize(mesh.triangles.size(), 2);
+  return mesh;
+}
+
+// Whether `p` lies in triangle `t`'s plane (within `tolerance` metres) and
+// within its box grown by the same.
+bool onTriangle(const bspf::World& world, std::uint32_t t, const Vec3& p, float tolerance) {
+  const bspf::schema::Plane& face = world.trianglePlanes()[t].face();
+  if (std::abs(bspf::signedDistance(face, p)) > tolerance) return false;
+  const bspf::schema::Triangle& tri = world.triangles()[t];
+  Vec3 low = Vec3::Constant(1e30f), high = -low;
+  for (const std::uint32_t v : {tri.v0(), tri.v1(), tri.v2()}) {
+    low = low.cwiseMin(bspf::toVec3(world.vertices()[v]));
+    high = high.cwiseMax(bspf::toVec3(world.vertices()[v]));
+  }
+  return (p.array() >= low.array() - tolerance).all() &&
+         (p.array() <= high.array() + tolerance).all();
+}
+
+}  // namespace
+
+TEST_CASE(
+    "a body walking on a grass floor reports contacts of surface grass at points on the floor",
+    "[runtime][movement][contacts]") {
+  const Level level(grassFloorWithWall());
+  const bspf::World& world = level.world;
+  const auto grass = world.findSurface("grass");
+  REQUIRE(grass.has_value());
+  const bspf::CollisionMethod method = eachMethod();
+  INFO(nameOf(method));
+  Body body = walker(Vec3(0, 0.9f, 0), method);
+  bspf::StepScratch scratch;
+  bspf::StepReport report;
+  int walkedOnGrass = 0;
+  for (int frame = 0; frame < 60; ++frame) {
+    bspf::stepBody(world, body, Vec3(0, 0, 40), kDt, scratch, &report);
+    if (frame < 10) continue;  // landing
+    REQUIRE(report.grounded);
+    REQUIRE(report.contactCount >= 1);
+    for (int c = 0; c < report.contactCount; ++c) {
+      INFO("frame " << frame << ", contact " << c);
+      const std::uint32_t t = report.contactTriangles[c];
+      REQUIRE(t < world.triangles().size());
+      CHECK(report.contactSurfaces[c] == world.triangleSurface(t));
+      CHECK(report.contactSurfaces[c] == *grass);
+      CHECK(world.surfaceName(report.contactSurfaces[c]) == "grass");
+      const Vec3& point = report.contactPoints[c];
+      // On the floor's top, under the body's centre.
+      CHECK(std::abs(point.y()) <= 2e-3f);
+      CHECK(onTriangle(world, t, point, 2e-3f));
+      CHECK(std::hypot(point.x() - body.position.x(), point.z() - body.position.z()) < 0.5f);
+      ++walkedOnGrass;
+    }
+  }
+  CHECK(walkedOnGrass >= 50);
+}
+
+TEST_CASE("a body walking into a stone wall reports a stone contact at a point on the wall",
+          "[runtime][movement][contacts]") {
+  const Level level(grassFloorWithWall());
+  const bspf::World& world = level.world;
+  const std::uint32_t stone = *world.findSurface("stone");
+  const bspf::CollisionMethod method = eachMethod();
+  INFO(nameOf(method));
+  Body body = walker(Vec3(3, 0.9f, 0), method);
+  bspf::StepScratch scratch;
+  bspf::StepReport report;
+  bool metWall = false;
+  for (int frame = 0; frame < 90 && !metWall; ++frame) {
+    bspf::stepBody(world, body, Vec3(40, 0, 0), kDt, scratch, &report);
+    for (int c = 0; c < report.contactCount; ++c) {
+      if (report.contactSurfaces[c] != stone) continue;
+      metWall = true;
+      const Vec3& point = report.contactPoints[c];
+      CHECK(report.contactNormals[c].x() < -0.99f);
+      CHECK(std::abs(point.x() - 5) <= 2e-3f);
+      CHECK(onTriangle(world, report.contactTriangles[c], point, 2e-3f));
+      CHECK(std::abs(point.y() - body.position.y()) < 0.05f);
+      CHECK(std::abs(point.z() - body.position.z()) < 0.05f);
+    }
+  }
+  CHECK(metWall);
+}
+
+TEST_CASE("a contact with another body says so with the kBodyContact sentinel",
+          "[runtime][movement][contacts]") {
+  const Level level(grassFloorWithWall());
+  const bspf::World& world = level.world;
+  std::vector<Body> bodies = {walker(Vec3(0, 0.9f, 0)), walker(Vec3(0.5f, 0.9f, 0))};
+  const std::vector<Vec3> forces(2, Vec3::Zero());
+  std::vector<bspf::StepReport> reports(2);
+  bspf::StepScratch scratch;
+  bspf::stepBodies(world, bodies, forces, kDt, scratch, reports);
+  for (int b = 0; b < 2; ++b) {
+    INFO("body " << b);
+    const bspf::StepReport& r = reports[b];
+    REQUIRE(r.bodyContacts == 1);
+    int bodyContacts = 0;
+    for (int c = 0; c < r.contactCount; ++c) {
+      if (r.contactTriangles[c] != bspf::kBodyContact) {
+        CHECK(r.contactSurfaces[c] != bspf::kBodyContact);
+        continue;
+      }
+      ++bodyContacts;
+      CHECK(r.contactSurfaces[c] == bspf::kBodyContact);
+      // Horizontal, from the other body towards this one; the point is on
+      // this body's side facing the other, where it stood before the push
+      // (x = 0 and 0.5: the level phase moved them only down).
+      const float towardsThis = b == 0 ? -1.0f : 1.0f;
+      CHECK(r.contactNormals[c].x() == Approx(towardsThis));
+      CHECK(r.contactNormals[c].y() == 0);
+      CHECK(r.contactPoints[c].x() == Approx(0.5f * b - towardsThis * 0.45f).margin(1e-5));
+      CHECK(r.contactPoints[c].z() == Approx(0).margin(1e-5));
+    }
+    CHECK(bodyContacts == 1);
+  }
+}
+
+TEST_CASE("a body falling below the level's bounds is reported, and not before",
+          "[runtime][movement][contacts]") {
+  const Level level(grassFloorWithWall());
+  const bspf::World& world = level.world;
+  const float lowest = world.boundsMin().y();
+  REQUIRE(lowest == -1.0f);
+  const bspf::CollisionMethod method = eachMethod();
+  // Beside the slab: nothing below it.
+  Body body = walker(Vec3(30, 2, 0), method);
+  bspf::StepScratch scratch;
+  bspf::StepReport report;
+  int frame = 0;
+  for (; frame < 600; ++frame) {
+    bspf::stepBody(world, body, Vec3::Zero(), kDt, scratch, &report);
+    const bool below = body.position.y() + body.radii.y < lowest;
+    REQUIRE(report.belowLevel == below);
+    if (below) break;
+  }
+  CHECK(frame < 600);
+  SECTION("a body standing on the level is never reported") {
+    Body standing = walker(Vec3(0, 0.9f, 0), method);
+    for (int f = 0; f < 60; ++f) {
+      bspf::stepBody(world, standing, Vec3::Zero(), kDt, scratch, &report);
+      CHECK_FALSE(report.belowLevel);
+    }
+  }
+}
+
+TEST_CASE("findSurface finds a surface by its exact name and nothing else",
+          "[runtime][movement][contacts]") {
+  const Level level(grassFloorWithWall());
+  const bspf::World& world = level.world;
+  REQUIRE(world.surfaceCount() == 3);
+  for (std::uint32_t s = 0; s < world.surfaceCount(); ++s)
+    CHECK(world.findSurface(world.surfaceName(s)) == s);
+  CHECK_FALSE(world.findSurface("Grass").has_value());
+  CHECK_FALSE(world.findSurface("").has_value());
+  CHECK(world.triangleSurfaces().size() == world.triangles().size());
+}

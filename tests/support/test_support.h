@@ -114,6 +114,15 @@ struct CommandResult {
 };
 CommandResult run(const std::string& command);
 
+/// `path` in single quotes, for a POSIX shell command.
+std::string quoted(const std::filesystem::path& path);
+
+/// Runs the bspc built with the tests with `arguments` (quoted already).
+CommandResult runBspc(const std::string& arguments);
+
+/// Writes `text` to `path`. Throws std::runtime_error when it cannot.
+void writeText(const std::filesystem::path& path, const std::string& text);
+
 }  // namespace bspf::test
 
 /// What a skipped test prints (ctest's SKIP_REGULAR_EXPRESSION for the tests,

@@ -23,14 +23,23 @@ struct CleanReport {
   /// corners with opposite winding are kept: they are the back of a two-sided
   /// surface.
   std::uint32_t droppedDuplicate = 0;
+  /// Triangles left out by the surface selection (CleanSettings::
+  /// dropSurfaces, onlySurfaces), before any other check.
+  std::uint32_t droppedBySurface = 0;
   std::uint32_t outputVertices = 0;
   std::uint32_t outputTriangles = 0;
 };
 
-/// Rounds positions to float (as the blob stores them), welds vertices within
-/// the tolerance (deterministically: each joins the first earlier vertex in
-/// reach), drops degenerate, zero-area and duplicate triangles and unused
-/// vertices, and keeps the order of what remains. Throws CompileError when a
+/// Leaves out the triangles of the surfaces the settings drop (or of those
+/// they do not keep only), rounds positions to float (as the blob stores
+/// them), welds vertices within the tolerance (deterministically: each joins
+/// the first earlier vertex in reach), drops degenerate, zero-area and
+/// duplicate triangles and unused vertices, and keeps the order of what
+/// remains. Each kept triangle keeps its surface; the result's surface table
+/// holds the surfaces its triangles use, in the order they first use them
+/// (a mesh without surfaces gets one, kDefaultSurface). Throws CompileError
+/// when a surface to drop or keep is not one of the mesh's (naming it), a
+/// surface index is out of range, there are more than 65536 surfaces, a
 /// coordinate is not finite as a float or beyond bspf::kMaxCoordinate, an
 /// index is out of range, or no triangle remains.
 Mesh cleanMesh(const Mesh& mesh, const CleanSettings& settings, CleanReport& report);

@@ -56,6 +56,13 @@ struct CleanSettings {
   /// Triangles with less area, square metres, are dropped as zero-area. Must
   /// be >= 0. Slivers above it are kept: they are real collision geometry.
   double minTriangleArea = 1e-10;
+  /// Surfaces (the source's materials, Mesh::surfaces) whose triangles are
+  /// left out of the collision model: triggers, decoration. Each name must
+  /// be a surface of the mesh (exact, case-sensitive).
+  std::vector<std::string> dropSurfaces;
+  /// When not empty, the only surfaces whose triangles are kept. Each name
+  /// must be a surface of the mesh. Not with dropSurfaces.
+  std::vector<std::string> onlySurfaces;
 };
 
 struct TreeSettings {
@@ -107,8 +114,8 @@ inline constexpr std::uint64_t kPeakBytesPerTriangle = 750;
 struct LimitSettings {
   /// Largest blob to write, bytes: 1 to kMaxBlobBytes (the default). Checked
   /// right after clean against the bytes every triangle and vertex takes in
-  /// a blob whatever the tree (minimumBlobBytes in write.h: about 156 a
-  /// triangle plus 12 a vertex, so about 13.7 million triangles at most),
+  /// a blob whatever the tree (minimumBlobBytes in write.h: about 158 a
+  /// triangle plus 12 a vertex, so about 13.5 million triangles at most),
   /// again once the tree is built, and on the blob itself.
   std::uint64_t maxBlobBytes = kMaxBlobBytes;
   /// Largest peak memory the compile may take, bytes; 0, the default, sets

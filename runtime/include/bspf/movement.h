@@ -176,8 +176,13 @@ struct Body {
   bool grounded = false;
 };
 
-/// The most contact normals a StepReport keeps.
+/// The most contacts a StepReport keeps.
 inline constexpr int kMaxReportedContacts = 8;
+
+/// The triangle index and the surface id a StepReport gives a contact with
+/// another body (StepReport::contactTriangles, contactSurfaces): no
+/// triangle or surface of a World has it.
+inline constexpr std::uint32_t kBodyContact = 0xFFFFFFFFu;
 
 /// What happened in one step of one body, for diagnostics.
 struct StepReport {
@@ -191,12 +196,41 @@ struct StepReport {
   bool refused = false;
   /// A walkable contact this step.
   bool grounded = false;
-  /// Unit normals of the surfaces slid against, in order (level first, then
-  /// pushes from other bodies); at most kMaxReportedContacts kept.
+  /// The contacts of this step, in order: the level's met by the body's own
+  /// move, then (stepBodies only) one for each body that pushed it, then the
+  /// level's met by that push; at most kMaxReportedContacts kept (a full
+  /// list keeps the ground contact that decided `grounded`). Entries
+  /// [0, contactCount) of the four arrays below describe them.
   int contactCount = 0;
+  /// Unit normals, world space, pointing out of the surface met towards the
+  /// body: for another body, horizontal, from it towards this one.
   std::array<Vec3, kMaxReportedContacts> contactNormals;
+  /// Where the body touched, metres, world space: the point of the body's
+  /// surface that touched (where its own normal is -contactNormals[i]),
+  /// at the time of the contact (after that slide). It lies within the skin
+  /// (MovementSettings::skin) and float rounding of the triangle's plane,
+  /// in front of it; for the exact sweep on the triangle (its face, an
+  /// edge or a corner), for the planes method over the triangle or, at its
+  /// edges and corners (which that method meets as their planes), just
+  /// beside it. For another body: the point of this body's surface
+  /// towards it, at its position before the push.
+  std::array<Vec3, kMaxReportedContacts> contactPoints;
+  /// The triangle met, an index into World::triangles(); kBodyContact for
+  /// another body.
+  std::array<std::uint32_t, kMaxReportedContacts> contactTriangles;
+  /// The surface of that triangle (World::triangleSurface; its name:
+  /// World::surfaceName), for footstep sounds and decals; kBodyContact for
+  /// another body.
+  std::array<std::uint32_t, kMaxReportedContacts> contactSurfaces;
   /// Bodies this body was pushed apart from (stepBodies only).
   int bodyContacts = 0;
+  /// The body has fallen out of the level: after its move against the level
+  /// its top (position.y + radii.y) is below the level's lowest point
+  /// (World::boundsMin().y), so nothing of the level can hold it any more.
+  /// The step keeps moving it (it falls until kMaxBodyCoordinate, then its
+  /// steps are refused as InvalidInput::OutOfReach): a game respawns it.
+  /// Set by the level phase (stepBody, stepBodiesAgainstLevel, stepBodies).
+  bool belowLevel = false;
   /// Not None when the inputs were invalid (see InvalidInput): the body was
   /// not moved (position, velocity and ground state are as they were, the
   /// other fields are zero), and stepBodies leaves it out of the body phase:

@@ -21,6 +21,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 
 namespace bspf {
 
@@ -72,7 +73,10 @@ enum class LoadStatus {
   /// normal not of unit length, a leaf entry's bounding box that does not
   /// hold its triangle, units other than metres with Y up, a coordinate
   /// beyond kMaxCoordinate, a degenerate triangle (isUsableTriangle), a
-  /// triangle plane that disagrees with the triangle's vertices).
+  /// triangle plane that disagrees with the triangle's vertices, a surface
+  /// table that is missing, empty or larger than 65536, a triangle_surfaces
+  /// vector of another length than the triangles, a surface id out of the
+  /// table).
   Malformed,
   /// The caller's bytes are not 8-byte aligned (a broken precondition of
   /// viewWorld that is reported rather than read misaligned).
@@ -107,10 +111,41 @@ class World {
   /// The triangles of leaf `leafIndex`. Precondition: leafIndex < leaves().size().
   std::span<const std::uint32_t> leafTriangleList(std::uint32_t leafIndex) const;
 
+  /// The level's bounding box, metres: every vertex lies within it.
+  const schema::Vec3& boundsMin() const { return *root_table_->bounds_min(); }
+  const schema::Vec3& boundsMax() const { return *root_table_->bounds_max(); }
+
   /// Metadata: bounds, build info (compiler version, options, statistics).
   const schema::World& blob() const { return *root_table_; }
   /// The whole blob, size prefix included.
   std::span<const std::byte> bytes() const { return bytes_; }
+  /// Surfaces: the source's materials (an OBJ's usemtl names, assimp's
+  /// material names), as bspc kept them; docs/format.md, "Surfaces". A
+  /// surface id is an index into the surface table: 0 to surfaceCount() - 1,
+  /// in the order the triangles first use them. A source without materials
+  /// has one surface, named "default". bspc writes each name once.
+  ///
+  /// Parallel to triangles(): each triangle's surface id. A view into the
+  /// blob; the loader has checked every id against the table.
+  std::span<const std::uint16_t> triangleSurfaces() const { return triangleSurfaces_; }
+  /// The number of surfaces, at least 1 (at most 65536).
+  std::uint32_t surfaceCount() const { return surfaceCount_; }
+  /// The surface id of triangle `triangle` (an index into triangles(), as
+  /// StepReport::contactTriangles and the queries give them). O(1).
+  /// Precondition: triangle < triangles().size() (asserted: an index from
+  /// this World never breaks it). kBodyContact, the triangle of a contact
+  /// with another body, is no triangle: check for it first.
+  std::uint32_t triangleSurface(std::uint32_t triangle) const;
+  /// The name of surface `surface`: a view into the blob (UTF-8 as the
+  /// source had it; may be empty if the source's material was unnamed), valid
+  /// while the World or a copy lives. O(1). Precondition: surface <
+  /// surfaceCount() (asserted).
+  std::string_view surfaceName(std::uint32_t surface) const;
+  /// The id of the surface named `name` (exact, case-sensitive), or nothing
+  /// when no surface has that name. Linear in the number of surfaces: look
+  /// the names a game cares about up once, after opening the level.
+  std::optional<std::uint32_t> findSurface(std::string_view name) const;
+
   /// A number unique to this opening of a blob within the process (never 0;
   /// copies of a World share it), so caches can tell worlds apart even when
   /// a new mapping reuses an old one's address.
@@ -128,6 +163,8 @@ class World {
   std::span<const schema::Leaf> leaves_;
   std::span<const std::uint32_t> leafTriangles_;
   std::span<const schema::Box> leafTriangleBounds_;
+  std::span<const std::uint16_t> triangleSurfaces_;
+  std::uint32_t surfaceCount_ = 0;
   std::int32_t root_ = -1;
   std::uint32_t treeDepth_ = 0;
   std::uint64_t id_ = 0;
