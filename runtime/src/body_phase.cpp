@@ -219,8 +219,17 @@ double BodyGrid::meetTime(std::uint32_t a, std::uint32_t b, Vec3& normal) const 
 void BodyGrid::sweep(std::span<const Body> bodies) {
   stops_.clear();
   const std::size_t n = bodies.size();
+  // Whether a body's move, over its radii, is longer than kSweepMinMove:
+  // (x / a)^2 + (y / b)^2 + (z / a)^2 > k^2, multiplied out (no division:
+  // this runs for every body every frame, and most frames have no fast body).
+  auto isFast = [](const Body& b) {
+    const Vec3 move = b.position - b.lastStepStart;
+    const float a2 = b.radii.xz * b.radii.xz, b2 = b.radii.y * b.radii.y;
+    return (move.x() * move.x() + move.z() * move.z()) * b2 + move.y() * move.y() * a2 >
+           kSweepMinMove * kSweepMinMove * a2 * b2;
+  };
+  if (std::none_of(bodies.begin(), bodies.end(), isFast)) return;
   movers_.resize(n);
-  bool anyFast = false;
   for (std::size_t i = 0; i < n; ++i) {
     const Body& b = bodies[i];
     Mover& m = movers_[i];
@@ -231,12 +240,8 @@ void BodyGrid::sweep(std::span<const Body> bodies) {
     const Vec3 reach(b.radii.xz + m.skin, b.radii.y + m.skin, b.radii.xz + m.skin);
     m.low = m.start.cwiseMin(b.position) - reach;
     m.high = m.start.cwiseMax(b.position) + reach;
-    const float x = m.move.x() / b.radii.xz, y = m.move.y() / b.radii.y,
-                z = m.move.z() / b.radii.xz;
-    m.fast = x * x + (y * y + z * z) > kSweepMinMove * kSweepMinMove;
-    anyFast = anyFast || m.fast;
+    m.fast = isFast(b);
   }
-  if (!anyFast) return;
 
   // Each fast body's path, in pieces of at most a cell along each axis, is
   // filed under every cell a piece's box covers (at most 3 a piece along

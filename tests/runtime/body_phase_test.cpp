@@ -496,6 +496,24 @@ TEST_CASE("a fast body passing 5 cm beside a slow one goes on at full speed with
   }
 }
 
+TEST_CASE(
+    "a fast body that starts overlapping another runs off past it or away from it instead of "
+    "sticking to it",
+    "[runtime][movement][sweep]") {
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  // Straight away from the other's centre, or past it, slightly closing
+  // but never nearer than its start.
+  const bool away = GENERATE(true, false);
+  INFO(methodName(method) << (away ? ", running away" : ", running past"));
+  const Vec3 start = away ? Vec3(0.3f, kStandY, 0) : Vec3(0, kStandY, 0.85f);
+  const Vec3 velocity = away ? Vec3(600, 0, 0) : Vec3(600, 0, -30);
+  Runway run(method, {{Vec3(0, kStandY, 0), Vec3::Zero()}, {start, velocity}});
+  run.step();
+  REQUIRE_FALSE(run.reports[1].stoppedByBody);
+  REQUIRE(run.bodies[1].position.x() > start.x() + 9.9f);
+}
+
 TEST_CASE("a fast body that met another off-centre keeps its speed along it and slides past",
           "[runtime][movement][sweep]") {
   const bspf::CollisionMethod method =
