@@ -532,6 +532,20 @@ TEST_CASE("a fast body that met another off-centre keeps its speed along it and 
   REQUIRE(run.bodies[0].position.x() > run.bodies[1].position.x() + 5);
 }
 
+TEST_CASE("a fast body running into another's shoulder from above is not thrown upward",
+          "[runtime][movement][sweep]") {
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO(methodName(method));
+  // 0.6 m up in the air: the contact normal tilts up by about 35 degrees.
+  Runway run(method,
+             {{Vec3(0, kStandY + 0.6f, 0), Vec3(600, 0, 0)}, {Vec3(5, kStandY, 0), Vec3::Zero()}});
+  run.step();
+  REQUIRE(run.reports[0].stoppedByBody);
+  REQUIRE(run.bodies[0].velocity.x() < 600);
+  REQUIRE(run.bodies[0].velocity.y() <= 0);
+}
+
 TEST_CASE("a fast body stopped short by another is not passed through by a faster one behind it",
           "[runtime][movement][sweep]") {
   const bspf::CollisionMethod method =
