@@ -25,7 +25,9 @@
 //      walkable ground within MovementSettings::maxStepDown below (ground
 //      snapping: slopes and stairs going down), unless it moves upward;
 //   3. contacts update the velocity (slide or bounce) and the ground state.
-// stepBodies then pushes overlapping bodies apart, horizontally (hashed grid
+// stepBodies then sweeps fast bodies' moves against each other (a body that
+// meets another stops there: no body passes through another at any speed;
+// BodyGrid), and pushes overlapping bodies apart, horizontally (hashed grid
 // broad phase, every push computed from the positions after the level phase,
 // at most kMaxBodyPushes pushers per body), each body's summed push (no
 // longer than its largest share) itself one move against the level, so a
