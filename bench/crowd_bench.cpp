@@ -5,7 +5,8 @@
 // two phases are timed apart (the level phase, stepBodiesAgainstLevel; the
 // body phase, BodyGrid::build plus pushBodiesApart), so the body phase's
 // share of the step shows. A linear body phase keeps its time per body flat.
-// Then the pile: 10,000 bodies dropped at one point, the worst case of the
+// Then the same crowd running at 40 m/s (the sweep's case: every body is
+// fast). Then the pile: 10,000 bodies dropped at one point, the worst case of the
 // body phase, timed per frame (stepBodies whole). Then the crowd of 1,024 on
 // 1 to `--threads` threads (default 2): stepBodies with a ThreadPool.
 // With `--level LEVEL.bspf --spawns FILE`, also the walkers crowd (64 and
@@ -40,16 +41,20 @@ double median(std::vector<double> values) {
   return values[values.size() / 2];
 }
 
-// `side` x `side` walkers on a 1.5 m grid, each walking its own way.
-void walkingCrowd(int side, std::vector<bspf::Body>& bodies, std::vector<bspf::Vec3>& forces) {
+// `side` x `side` walkers on a 1.5 m grid, each walking its own way (at
+// up to `speed` m/s: 6 walks, 40 runs, and every body's move is then long
+// enough for the body phase's sweep).
+void walkingCrowd(int side, std::vector<bspf::Body>& bodies, std::vector<bspf::Vec3>& forces,
+                  float speed = 6) {
   const int n = side * side;
   bodies.assign(n, {});
   forces.resize(n);
   for (int i = 0; i < n; ++i) {
     bodies[i].position = bspf::Vec3(1.5f * (i % side), 0.851f, 1.5f * (i / side));
     bodies[i].radii = {0.45f, 0.85f};
+    bodies[i].settings.maxHorizontalSpeed = speed;
     const float angle = 2.399963f * i;  // golden angle: directions spread evenly
-    forces[i] = bspf::Vec3(std::cos(angle), 0, std::sin(angle)) * 20.0f;
+    forces[i] = bspf::Vec3(std::cos(angle), 0, std::sin(angle)) * (20.0f * speed / 6);
   }
 }
 
@@ -67,6 +72,34 @@ void timePhases(const bspf::World& world, std::vector<bspf::Body>& bodies,
   const auto stop = Clock::now();
   levelNs.push_back(nanoseconds(start, levelDone) / n);
   bodyNs.push_back(nanoseconds(levelDone, stop) / n);
+}
+
+constexpr float kDt = 1.0f / 60;
+constexpr int kFrames = 120;
+
+// The walking crowd of `side` x `side` bodies at up to `speed` m/s on
+// `world`, 120 frames: prints its case line.
+void crowdCase(const bspf::World& world, int side, float speed) {
+  std::vector<bspf::Body> bodies;
+  std::vector<bspf::Vec3> forces;
+  walkingCrowd(side, bodies, forces, speed);
+  const std::size_t n = bodies.size();
+  bspf::StepScratch scratch;
+  std::vector<bspf::StepReport> reports(n);
+  std::vector<double> levelNs, bodyNs, stepNs;
+  double contacts = 0, stopped = 0;
+  for (int frame = 0; frame < kFrames; ++frame) {
+    timePhases(world, bodies, forces, kDt, scratch, reports, levelNs, bodyNs);
+    stepNs.push_back(levelNs.back() + bodyNs.back());
+    for (const auto& r : reports) contacts += r.bodyContacts, stopped += r.stoppedByBody;
+  }
+  const double steps = double(kFrames) * double(n);
+  std::printf(
+      "{\"case\":\"%s crowd\",\"bodies\":%zu,\"speed\":%.0f,\"ns_per_body_step\":%.0f,"
+      "\"level_phase_ns\":%.0f,\"body_phase_ns\":%.0f,\"body_phase_share\":%.3f,"
+      "\"body_contacts_per_step\":%.3f,\"stopped_by_body_per_step\":%.4f}\n",
+      speed > 6 ? "running" : "walking", n, speed, median(stepNs), median(levelNs), median(bodyNs),
+      median(bodyNs) / median(stepNs), contacts / steps, stopped / steps);
 }
 
 // The walkers crowd on a real level: agents from its spawn points.
@@ -126,33 +159,13 @@ int main(int argc, char** argv) {
   level->needs(app.get_option("--spawns"));
   if (const int status = bspf::bench::parseCommandLine(app, argc, argv); status >= 0) return status;
   if (!levelPath.empty()) walkersOnLevel(levelPath.c_str(), spawnsPath.c_str());
-  constexpr float kDt = 1.0f / 60;
-  constexpr int kFrames = 120;
   // A 400 m square floor slab, compiled in memory.
   const bspf::bench::CompiledLevel floor(bspf::bench::floorMesh(200.0), {}, "floor");
   const bspf::World& world = floor.world();
 
-  for (const int side : {8, 16, 32, 64, 128}) {
-    std::vector<bspf::Body> bodies;
-    std::vector<bspf::Vec3> forces;
-    walkingCrowd(side, bodies, forces);
-    const std::size_t n = bodies.size();
-    bspf::StepScratch scratch;
-    std::vector<bspf::StepReport> reports(n);
-    std::vector<double> levelNs, bodyNs, stepNs;
-    double contacts = 0;
-    for (int frame = 0; frame < kFrames; ++frame) {
-      timePhases(world, bodies, forces, kDt, scratch, reports, levelNs, bodyNs);
-      stepNs.push_back(levelNs.back() + bodyNs.back());
-      for (const auto& r : reports) contacts += r.bodyContacts;
-    }
-    std::printf(
-        "{\"case\":\"walking crowd\",\"bodies\":%zu,\"ns_per_body_step\":%.0f,"
-        "\"level_phase_ns\":%.0f,\"body_phase_ns\":%.0f,\"body_phase_share\":%.3f,"
-        "\"body_contacts_per_step\":%.3f}\n",
-        n, median(stepNs), median(levelNs), median(bodyNs), median(bodyNs) / median(stepNs),
-        contacts / (double(kFrames) * double(n)));
-  }
+  for (const int side : {8, 16, 32, 64, 128}) crowdCase(world, side, 6);
+  // The crowd running at 40 m/s: every body is swept against the others.
+  for (const int side : {32, 128}) crowdCase(world, side, 40);
 
   {
     const int n = 10000;

@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: MIT
-// The body-against-body phase of stepBodies: a hashed grid of the bodies'
-// positions after the level phase, then, for each body independently, the
-// sum of the pushes from its nearest overlapping bodies (no longer than the
-// largest of them), applied as one move against the level: a slide only
-// when the move comes near a triangle.
+// The body-against-body phase of stepBodies: a sweep of the fast bodies'
+// moves against the bodies near their paths (each stopped where it first
+// meets another), a hashed grid of the bodies' positions after the level
+// phase and the sweep, then, for each body independently, the sum of the
+// pushes from its nearest overlapping bodies (no longer than the largest of
+// them), applied as one move against the level: a slide only when the move
+// comes near a triangle.
 #include <bspf/movement.h>
 
 #include <algorithm>
@@ -11,6 +13,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numbers>
 
 #include "slide.h"
@@ -137,6 +140,205 @@ std::uint64_t cellCoordinate(float scaled, bool& upperHalf) {
 
 }  // namespace
 
+namespace {
+
+// The cells, along one axis, of the coordinates low to high (metres) in
+// cells of 1 / `inverse` metres.
+std::array<std::uint64_t, 2> cellRange(float low, float high, float inverse) {
+  bool upper;
+  return {cellCoordinate(low * inverse, upper), cellCoordinate(high * inverse, upper)};
+}
+
+// Where two spheres' centres first come within `reach` of each other, the
+// centres `d` apart (one's minus the other's) at the start of a stretch and
+// moving apart by `v` per unit of time over `length` of it: the offset into
+// the stretch, or a negative number if they never do. Two already within
+// reach meet at once only when the move would take one through the middle
+// of the other (past half their distance): bodies that touch may still walk
+// past each other, or apart. In double: a fast body's move is hundreds of
+// times its size.
+double firstMeeting(const Eigen::Vector3d& d, const Eigen::Vector3d& v, double reach,
+                    double length) {
+  const double dd = d.squaredNorm(), dv = d.dot(v), vv = v.squaredNorm();
+  if (!(vv > 0) || dv >= 0) return -1;  // not closing
+  const double gap = dd - reach * reach;
+  if (gap <= 0) {
+    const double s = std::min(-dv / vv, length);
+    return (d + s * v).squaredNorm() < 0.25 * dd ? 0 : -1;
+  }
+  const double disc = dv * dv - vv * gap;
+  if (disc < 0) return -1;
+  // The smaller root, written without the cancellation of -dv - sqrt(disc).
+  const double s = gap / (-dv + std::sqrt(disc));
+  return s <= length ? s : -1;
+}
+
+bool boxesMeet(const Vec3& lowA, const Vec3& highA, const Vec3& lowB, const Vec3& highB) {
+  return (lowA.array() <= highB.array()).all() && (lowB.array() <= highA.array()).all();
+}
+
+}  // namespace
+
+double BodyGrid::meetTime(std::uint32_t a, std::uint32_t b, Vec3& normal) const {
+  const Mover& p = movers_[a];
+  const Mover& q = movers_[b];
+  // The pair's space: each axis over the summed radii, where two bodies of
+  // one shape touch when their centres are 1 apart. A body of another shape
+  // is taken as the sphere of its largest radius there, so the pair never
+  // meets later than it truly would.
+  const double sumXZ = double(p.radii.xz) + q.radii.xz, sumY = double(p.radii.y) + q.radii.y;
+  const Eigen::Vector3d scale(1 / sumXZ, 1 / sumY, 1 / sumXZ);
+  const double reach = std::max(p.radii.xz / sumXZ, p.radii.y / sumY) +
+                       std::max(q.radii.xz / sumXZ, q.radii.y / sumY) +
+                       0.5 * (double(p.skin) + q.skin) / std::min(sumXZ, sumY);
+  const double ta = stops_[a].time, tb = stops_[b].time;
+  const Eigen::Vector3d moveA = p.move.cast<double>().cwiseProduct(scale),
+                        moveB = q.move.cast<double>().cwiseProduct(scale);
+  // Both move until the earlier stop time, then only the later one.
+  const double first = std::min(ta, tb), second = std::max(ta, tb);
+  Eigen::Vector3d d = (p.start - q.start).cast<double>().cwiseProduct(scale);
+  const Eigen::Vector3d together = moveA - moveB, alone = ta > tb ? moveA : Eigen::Vector3d(-moveB);
+  double begin = 0, at = -1;
+  Eigen::Vector3d v = together;
+  if (first > 0) at = firstMeeting(d, together, reach, first);
+  if (at < 0 && second > first) {
+    d += first * together;
+    begin = first;
+    v = alone;
+    at = firstMeeting(d, alone, reach, second - first);
+  }
+  if (at < 0) return 2;
+  // The contact normal: the gradient of the pair's sphere, back in metres.
+  Eigen::Vector3d n = (d + at * v).cwiseProduct(scale);
+  if (!(n.squaredNorm() > 1e-24)) n = -v.cwiseProduct(scale);
+  if (!(n.squaredNorm() > 1e-24)) n = Eigen::Vector3d::UnitX();
+  normal = n.normalized().cast<float>();
+  return begin + at;
+}
+
+void BodyGrid::sweep(std::span<const Body> bodies) {
+  stops_.clear();
+  const std::size_t n = bodies.size();
+  // Whether a body's move, over its radii, is longer than kSweepMinMove:
+  // (x / a)^2 + (y / b)^2 + (z / a)^2 > k^2, multiplied out (no division:
+  // this runs for every body every frame, and most frames have no fast body).
+  auto isFast = [](const Body& b) {
+    const Vec3 move = b.position - b.lastStepStart;
+    const float a2 = b.radii.xz * b.radii.xz, b2 = b.radii.y * b.radii.y;
+    return (move.x() * move.x() + move.z() * move.z()) * b2 + move.y() * move.y() * a2 >
+           kSweepMinMove * kSweepMinMove * a2 * b2;
+  };
+  if (std::none_of(bodies.begin(), bodies.end(), isFast)) return;
+  movers_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Body& b = bodies[i];
+    Mover& m = movers_[i];
+    m.start = b.lastStepStart;
+    m.move = b.position - m.start;
+    m.radii = b.radii;
+    m.skin = b.settings.skin;
+    const Vec3 reach(b.radii.xz + m.skin, b.radii.y + m.skin, b.radii.xz + m.skin);
+    m.low = m.start.cwiseMin(b.position) - reach;
+    m.high = m.start.cwiseMax(b.position) + reach;
+    m.fast = isFast(b);
+  }
+
+  // Each fast body's path, in pieces of at most a cell along each axis, is
+  // filed under every cell a piece's box covers (at most 3 a piece along
+  // each axis: the piece and a body's reach of half a cell on each side).
+  sweepCells_.clear();
+  oversize_.clear();
+  sweepPairs_.clear();
+  Vec3 fastLow = Vec3::Constant(std::numeric_limits<float>::infinity()), fastHigh = -fastLow;
+  const Vec3 inverse(inverseWidth_, inverseHeight_, inverseWidth_);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const Mover& m = movers_[i];
+    if (!m.fast) continue;
+    fastLow = fastLow.cwiseMin(m.low);
+    fastHigh = fastHigh.cwiseMax(m.high);
+    const float pieces =
+        std::max(1.0f, std::ceil(m.move.cwiseAbs().cwiseProduct(inverse).maxCoeff()));
+    if (!(pieces <= float(kMaxSweepPieces))) {
+      oversize_.push_back(i);
+      continue;
+    }
+    const Vec3 reach = 0.5f * (m.high - m.low - m.move.cwiseAbs());
+    for (int k = 0; k < int(pieces); ++k) {
+      const Vec3 from = m.start + (float(k) / pieces) * m.move,
+                 to = k + 1 == int(pieces) ? Vec3(m.start + m.move)
+                                           : Vec3(m.start + (float(k + 1) / pieces) * m.move);
+      const Vec3 low = from.cwiseMin(to) - reach, high = from.cwiseMax(to) + reach;
+      std::array<std::array<std::uint64_t, 2>, 3> range;
+      for (int axis = 0; axis < 3; ++axis)
+        range[axis] = cellRange(low[axis], high[axis], inverse[axis]);
+      for (std::uint64_t x = range[0][0]; x <= range[0][1]; ++x)
+        for (std::uint64_t y = range[1][0]; y <= range[1][1]; ++y)
+          for (std::uint64_t z = range[2][0]; z <= range[2][1]; ++z)
+            sweepCells_.emplace_back(x << 42 | y << 21 | z, i);
+    }
+  }
+  std::sort(sweepCells_.begin(), sweepCells_.end());
+  sweepCells_.erase(std::unique(sweepCells_.begin(), sweepCells_.end()), sweepCells_.end());
+
+  // The pairs whose paths' boxes meet: fast bodies sharing a cell, a slow
+  // body and the fast ones in the cells its box covers, an oversize move
+  // and every body.
+  auto consider = [&](std::uint32_t x, std::uint32_t y) {
+    const std::uint32_t a = std::min(x, y), b = std::max(x, y);
+    if (a != b && boxesMeet(movers_[a].low, movers_[a].high, movers_[b].low, movers_[b].high))
+      sweepPairs_.push_back(std::uint64_t(a) << 32 | b);
+  };
+  for (std::size_t g = 0; g < sweepCells_.size();) {
+    std::size_t end = g;
+    while (end < sweepCells_.size() && sweepCells_[end].first == sweepCells_[g].first) ++end;
+    for (std::size_t e = g; e < end; ++e)
+      for (std::size_t f = e + 1; f < end && f <= e + kMaxSweepCellBodies; ++f)
+        consider(sweepCells_[e].second, sweepCells_[f].second);
+    g = end;
+  }
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const Mover& m = movers_[i];
+    if (m.fast || !boxesMeet(m.low, m.high, fastLow, fastHigh)) continue;
+    std::array<std::array<std::uint64_t, 2>, 3> range;
+    for (int axis = 0; axis < 3; ++axis)
+      range[axis] = cellRange(m.low[axis], m.high[axis], inverse[axis]);
+    for (std::uint64_t x = range[0][0]; x <= range[0][1]; ++x)
+      for (std::uint64_t y = range[1][0]; y <= range[1][1]; ++y)
+        for (std::uint64_t z = range[2][0]; z <= range[2][1]; ++z) {
+          const std::uint64_t key = x << 42 | y << 21 | z;
+          auto it = std::lower_bound(sweepCells_.begin(), sweepCells_.end(),
+                                     std::pair<std::uint64_t, std::uint32_t>(key, 0));
+          for (int k = 0; it != sweepCells_.end() && it->first == key && k < kMaxSweepCellBodies;
+               ++it, ++k)
+            consider(it->second, i);
+        }
+  }
+  for (const std::uint32_t x : oversize_)
+    for (std::uint32_t y = 0; y < n; ++y) consider(x, y);
+  std::sort(sweepPairs_.begin(), sweepPairs_.end());
+  sweepPairs_.erase(std::unique(sweepPairs_.begin(), sweepPairs_.end()), sweepPairs_.end());
+
+  // The stop times: each pair that meets stops both bodies there, and the
+  // earliest meeting counts. A body stopped early may be met by others that
+  // passed it by before, so the pairs are passed over until nothing
+  // changes. In pair order, on this thread: the result does not depend on
+  // how the phases are split between threads.
+  stops_.assign(n, {1.0f, Vec3::Zero()});
+  for (int pass = 0; pass < kMaxSweepPasses; ++pass) {
+    bool changed = false;
+    for (const std::uint64_t pair : sweepPairs_) {
+      const std::uint32_t a = std::uint32_t(pair >> 32), b = std::uint32_t(pair);
+      Vec3 normal;
+      const double meet = meetTime(a, b, normal);
+      if (meet >= 1) continue;
+      const float time = float(meet);
+      if (time < stops_[a].time) stops_[a] = {time, normal}, changed = true;
+      if (time < stops_[b].time) stops_[b] = {time, -normal}, changed = true;
+    }
+    if (!changed) break;
+  }
+}
+
 std::uint32_t BodyGrid::find(std::uint64_t key) const {
   const std::uint32_t mask = std::uint32_t(cells_.size() - 1);
   // Fibonacci hashing: the golden-ratio multiplier carries the low bits that
@@ -160,6 +362,14 @@ void BodyGrid::build(std::span<const Body> bodies) {
   }
   inverseWidth_ = width > 0 ? 1 / width : 1;
   inverseHeight_ = height > 0 ? 1 / height : 1;
+  // The sweep stops fast bodies where they first meet another; the grid
+  // holds every body where it ends.
+  sweep(bodies);
+  auto endOf = [&](std::size_t i) -> Vec3 {
+    return stops_.empty() || !(stops_[i].time < 1)
+               ? bodies[i].position
+               : Vec3(movers_[i].start + stops_[i].time * movers_[i].move);
+  };
   // At most half full, so a look-up probes few slots.
   std::size_t size = 16;
   shift_ = 60;
@@ -171,7 +381,7 @@ void BodyGrid::build(std::span<const Body> bodies) {
   places_.resize(n);
   std::array<std::uint64_t, 3> lowCell{kFieldMask, kFieldMask, kFieldMask}, highCell{};
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec3& p = bodies[i].position;
+    const Vec3 p = endOf(i);
     bool upper[3];
     const std::array<std::uint64_t, 3> cell{cellCoordinate(p.x() * inverseWidth_, upper[0]),
                                             cellCoordinate(p.y() * inverseHeight_, upper[1]),
@@ -213,7 +423,7 @@ void BodyGrid::build(std::span<const Body> bodies) {
   for (std::size_t i = n; i-- > 0;) {
     Place& place = places_[i];
     place.entry = --cells_[place.cellSlot].first;
-    entries_[place.entry] = {bodies[i].position, bodies[i].radii, std::uint32_t(i)};
+    entries_[place.entry] = {endOf(i), bodies[i].radii, std::uint32_t(i)};
     if (bits) {
       // One cell of margin, so a neighbour's bit is always in the box.
       place.bit = std::uint32_t((place.key >> 42) - lowCell[0] + 1 +
@@ -269,6 +479,34 @@ bool touchesNothing(const World& world, const Vec3& from, const Vec3& to, Ellips
   return true;
 }
 
+// A body the sweep stopped where it met another: set back to `at` along its
+// move (as a move from its step's start against the level: the straight
+// line from there may cut a corner its slides went round), and its velocity
+// loses what closes on the other body along `normal`. Never upward speed
+// from it: running into another's shoulder is not a jump over it.
+void stopAtBody(const World& world, Body& body, const Vec3& at, const Vec3& normal,
+                StepScratch& scratch, StepReport* report, detail::BodyCache& cache) {
+  if (touchesNothing(world, body.lastStepStart, at, body.radii, body.settings.skin, cache.nearby,
+                     scratch.sweep)) {
+    body.position = at;
+  } else {
+    swapBodyCache(scratch, cache);
+    const SlideResult slide =
+        slideAgainstLevel(world, body.lastStepStart, at, body.radii, body.settings,
+                          walkableNormalY(body.settings), scratch);
+    swapBodyCache(scratch, cache);
+    body.position = slide.end;
+    recordSlide(world, report, slide, false);
+  }
+  const float closing = body.velocity.dot(normal);
+  if (closing < 0) {
+    const float up = std::max(body.velocity.y(), 0.0f);
+    body.velocity -= closing * normal;
+    body.velocity.y() = std::min(body.velocity.y(), up);
+  }
+  if (report) report->stoppedByBody = true;
+}
+
 }  // namespace
 
 namespace detail {
@@ -280,6 +518,9 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
   for (std::size_t i = first; i < last; ++i) {
     Body& body = bodies[i];
     const BodyGrid::Entry& self = grid.entries_[grid.places_[i].entry];
+    if (!grid.stops_.empty() && grid.stops_[i].time < 1)
+      stopAtBody(world, body, self.position, grid.stops_[i].normal, scratch,
+                 reports.empty() ? nullptr : &reports[i], caches[i]);
     NearestPushers nearest;
     int examined = 0;
     auto examine = [&](const BodyGrid::Entry& other) {

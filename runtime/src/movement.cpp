@@ -243,6 +243,8 @@ namespace detail {
 InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt,
                      StepScratch& scratch, StepReport* report) {
   if (report) *report = StepReport{};
+  // Where the body phase's sweep starts this body's move from.
+  body.lastStepStart = body.position;
   if (const InvalidInput invalid = checkStepInputs(body, force, dt);
       invalid != InvalidInput::None) {
     if (report) report->invalidInput = invalid;

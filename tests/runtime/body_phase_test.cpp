@@ -68,7 +68,43 @@ void requireSameFrame(std::span<const Body> expected, std::span<const Body> actu
     REQUIRE(expectedReports[i].bodyContacts == actualReports[i].bodyContacts);
     REQUIRE(expectedReports[i].contactCount == actualReports[i].contactCount);
     REQUIRE(expectedReports[i].iterations == actualReports[i].iterations);
+    REQUIRE(expectedReports[i].stoppedByBody == actualReports[i].stoppedByBody);
   }
+}
+
+// Steps `makeCrowd()` for `frames` frames with stepBodies on one thread and
+// on pools of 1 to `maxThreads` threads, requiring the same frame from each;
+// returns the body contacts and the bodies stopped by the sweep, summed over
+// the frames.
+template <typename MakeCrowd>
+std::pair<int, int> requireSameOnThreads(MakeCrowd makeCrowd, int frames, int maxThreads) {
+  const bspf::test::CompiledMesh level(yard());
+  Crowd reference = makeCrowd();
+  std::vector<bspf::StepReport> referenceReports(reference.bodies.size());
+  bspf::StepScratch scratch;
+  std::vector<Crowd> threaded;
+  std::vector<std::unique_ptr<bspf::ThreadPool>> pools;
+  std::vector<std::vector<bspf::StepScratch>> scratches;
+  std::vector<std::vector<bspf::StepReport>> reports;
+  for (int threads = 1; threads <= maxThreads; ++threads) {
+    threaded.push_back(makeCrowd());
+    pools.push_back(std::make_unique<bspf::ThreadPool>(threads));
+    scratches.emplace_back(threads);
+    reports.emplace_back(reference.bodies.size());
+  }
+  int contacts = 0, stopped = 0;
+  for (int frame = 0; frame < frames; ++frame) {
+    bspf::stepBodies(level.world, reference.bodies, reference.forces, kDt, scratch,
+                     referenceReports);
+    for (const auto& r : referenceReports) contacts += r.bodyContacts, stopped += r.stoppedByBody;
+    for (std::size_t t = 0; t < threaded.size(); ++t) {
+      INFO("frame " << frame << ", " << t + 1 << " threads");
+      bspf::stepBodies(level.world, threaded[t].bodies, threaded[t].forces, kDt, *pools[t],
+                       scratches[t], reports[t]);
+      requireSameFrame(reference.bodies, threaded[t].bodies, referenceReports, reports[t]);
+    }
+  }
+  return {contacts, stopped};
 }
 
 }  // namespace
@@ -78,32 +114,7 @@ TEST_CASE("stepping a crowd on 1, 2, 3 or 4 threads gives bit-identical trajecto
   const bspf::CollisionMethod method =
       GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
   INFO((method == bspf::CollisionMethod::Planes ? "planes" : "exact"));
-  const bspf::test::CompiledMesh level(yard());
-  Crowd reference = packedCrowd(method);
-  std::vector<bspf::StepReport> referenceReports(reference.bodies.size());
-  bspf::StepScratch scratch;
-  std::vector<Crowd> threaded;
-  std::vector<std::unique_ptr<bspf::ThreadPool>> pools;
-  std::vector<std::vector<bspf::StepScratch>> scratches;
-  std::vector<std::vector<bspf::StepReport>> reports;
-  for (int threads = 1; threads <= 4; ++threads) {
-    threaded.push_back(packedCrowd(method));
-    pools.push_back(std::make_unique<bspf::ThreadPool>(threads));
-    scratches.emplace_back(threads);
-    reports.emplace_back(reference.bodies.size());
-  }
-  int contacts = 0;
-  for (int frame = 0; frame < 40; ++frame) {
-    bspf::stepBodies(level.world, reference.bodies, reference.forces, kDt, scratch,
-                     referenceReports);
-    for (const auto& r : referenceReports) contacts += r.bodyContacts;
-    for (std::size_t t = 0; t < threaded.size(); ++t) {
-      INFO("frame " << frame << ", " << t + 1 << " threads");
-      bspf::stepBodies(level.world, threaded[t].bodies, threaded[t].forces, kDt, *pools[t],
-                       scratches[t], reports[t]);
-      requireSameFrame(reference.bodies, threaded[t].bodies, referenceReports, reports[t]);
-    }
-  }
+  const int contacts = requireSameOnThreads([method] { return packedCrowd(method); }, 40, 4).first;
   REQUIRE(contacts > 300);  // the crowd is dense: the body phase did work
 }
 
@@ -332,4 +343,245 @@ TEST_CASE(
     REQUIRE(highMove > 0.01f);
     REQUIRE(lowMove == Approx(-highMove).margin(1e-5));
   }
+}
+
+namespace {
+
+// Bodies of the default shape (radii 0.45 and 0.85) standing on a 400 m
+// floor, without friction so that a set velocity is the move.
+struct Runway {
+  bspf::test::CompiledMesh level{bspf::test::boxMesh({-200, -1, -200}, {200, 0, 200})};
+  std::vector<Body> bodies;
+  std::vector<bspf::StepReport> reports;
+  bspf::StepScratch scratch;
+
+  Runway(bspf::CollisionMethod method, std::initializer_list<std::pair<Vec3, Vec3>> placed) {
+    for (const auto& [position, velocity] : placed) {
+      Body b;
+      b.position = position;
+      b.velocity = velocity;
+      b.grounded = true;
+      b.settings.method = method;
+      b.settings.maxHorizontalSpeed = 10000;
+      b.settings.groundFriction = 0;
+      bodies.push_back(b);
+    }
+    reports.resize(bodies.size());
+  }
+  // One frame; the bodies' positions before it.
+  std::vector<Vec3> step() {
+    std::vector<Vec3> before;
+    for (const Body& b : bodies) before.push_back(b.position);
+    const std::vector<Vec3> forces(bodies.size(), Vec3::Zero());
+    bspf::stepBodies(level.world, bodies, forces, kDt, scratch, reports);
+    return before;
+  }
+};
+
+constexpr float kStandY = 0.851f;
+constexpr float kTouching = 0.9f;  // two default bodies' centres, side by side
+
+// The least distance between two bodies' centres over a frame, each moving
+// in a straight line from `fromA` to `toA` and `fromB` to `toB`: below
+// kTouching, they passed into (or through) each other on the way.
+float closestApproach(const Vec3& fromA, const Vec3& toA, const Vec3& fromB, const Vec3& toB) {
+  const Vec3 d = fromA - fromB, v = (toA - fromA) - (toB - fromB);
+  const float t = v.squaredNorm() > 0 ? std::clamp(-d.dot(v) / v.squaredNorm(), 0.0f, 1.0f) : 0;
+  return (d + t * v).norm();
+}
+
+const char* methodName(bspf::CollisionMethod method) {
+  return method == bspf::CollisionMethod::Planes ? "planes" : "exact";
+}
+
+}  // namespace
+
+TEST_CASE("a body at 600 m/s stops at the body in its path instead of passing through it",
+          "[runtime][movement][sweep]") {
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO(methodName(method));
+  Runway run(method,
+             {{Vec3(0, kStandY, 0.1f), Vec3(600, 0, 0)}, {Vec3(5, kStandY, 0.1f), Vec3::Zero()}});
+  const std::vector<Vec3> before = run.step();
+  const Body &fast = run.bodies[0], &still = run.bodies[1];
+  // Stopped just short of the other body, not 10 m on beyond it.
+  REQUIRE(fast.position.x() < still.position.x() - kTouching + 0.01f);
+  REQUIRE(fast.position.x() > still.position.x() - kTouching - 0.05f);
+  REQUIRE(closestApproach(before[0], fast.position, before[1], still.position) >=
+          kTouching - 1e-3f);
+  REQUIRE(run.reports[0].stoppedByBody);
+  // It lost its speed into the other body, and the other was not flung.
+  REQUIRE(fast.velocity.x() < 1);
+  REQUIRE((still.position - before[1]).norm() < 0.01f);
+  // Neither ends up on the other's far side in the frames after.
+  for (int frame = 0; frame < 30; ++frame) {
+    run.step();
+    REQUIRE(run.bodies[0].position.x() < run.bodies[1].position.x() - kTouching + 0.01f);
+  }
+}
+
+TEST_CASE("a body at any speed from 20 to 6,000 m/s stops at the body in its path",
+          "[runtime][movement][sweep]") {
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  const float speed = GENERATE(20.0f, 60.0f, 600.0f, 6000.0f);
+  INFO(methodName(method) << " at " << speed << " m/s");
+  // The other body halfway along the move, beyond touching distance.
+  const float ahead = kTouching + 0.5f * speed * kDt;
+  Runway run(method, {{Vec3(-80, kStandY, 3), Vec3(speed, 0, 0)},
+                      {Vec3(-80 + ahead, kStandY, 3.2f), Vec3::Zero()}});
+  const std::vector<Vec3> before = run.step();
+  REQUIRE(closestApproach(before[0], run.bodies[0].position, before[1], run.bodies[1].position) >=
+          kTouching - 1e-3f);
+  REQUIRE(run.reports[0].stoppedByBody);
+  REQUIRE(run.bodies[0].position.x() < run.bodies[1].position.x());
+}
+
+TEST_CASE("two bodies at 600 m/s head-on stop where they meet, each on its own side",
+          "[runtime][movement][sweep]") {
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO(methodName(method));
+  Runway run(method,
+             {{Vec3(-5, kStandY, 1), Vec3(600, 0, 0)}, {Vec3(5, kStandY, 1), Vec3(-600, 0, 0)}});
+  const std::vector<Vec3> before = run.step();
+  const Body &a = run.bodies[0], &b = run.bodies[1];
+  REQUIRE(closestApproach(before[0], a.position, before[1], b.position) >= kTouching - 1e-3f);
+  REQUIRE(run.reports[0].stoppedByBody);
+  REQUIRE(run.reports[1].stoppedByBody);
+  // They meet in the middle: each is stopped just short of x = 0.
+  REQUIRE(a.position.x() == Approx(-0.5f * kTouching).margin(0.02));
+  REQUIRE(b.position.x() == Approx(0.5f * kTouching).margin(0.02));
+  REQUIRE(a.velocity.x() < 1);
+  REQUIRE(b.velocity.x() > -1);
+}
+
+TEST_CASE("two fast bodies whose paths cross at an angle meet instead of passing through",
+          "[runtime][movement][sweep]") {
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO(methodName(method));
+  // One along x at 600 m/s, the other at 60 degrees to it at 300 m/s: both
+  // reach the crossing at (0, 0) halfway through the frame.
+  const Vec3 slant(std::cos(1.0472f), 0, std::sin(1.0472f));
+  Runway run(method, {{Vec3(-5, kStandY, 0), Vec3(600, 0, 0)},
+                      {Vec3(0, kStandY, 0) - 2.5f * slant, 300 * slant}});
+  const std::vector<Vec3> before = run.step();
+  REQUIRE(closestApproach(before[0], run.bodies[0].position, before[1], run.bodies[1].position) >=
+          kTouching - 1e-3f);
+  REQUIRE(run.reports[0].stoppedByBody);
+  REQUIRE(run.reports[1].stoppedByBody);
+  // Both short of the crossing.
+  REQUIRE(run.bodies[0].position.x() < 0);
+  REQUIRE((run.bodies[1].position - Vec3(0, kStandY, 0)).dot(slant) < 0);
+}
+
+TEST_CASE("a fast body passing 5 cm beside a slow one goes on at full speed without snagging",
+          "[runtime][movement][sweep]") {
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO(methodName(method));
+  Runway run(method, {{Vec3(0, kStandY, 0), Vec3(600, 0, 0)},
+                      {Vec3(5, kStandY, kTouching + 0.05f), Vec3(1, 0, 0)}});
+  for (int frame = 0; frame < 3; ++frame) {
+    const std::vector<Vec3> before = run.step();
+    INFO("frame " << frame);
+    REQUIRE_FALSE(run.reports[0].stoppedByBody);
+    REQUIRE_FALSE(run.reports[1].stoppedByBody);
+    REQUIRE(run.reports[0].bodyContacts == 0);
+    REQUIRE(run.bodies[0].position.x() == Approx(before[0].x() + 10).margin(1e-3));
+    REQUIRE(run.bodies[0].velocity.x() == 600);
+    REQUIRE(run.bodies[1].position.x() == Approx(before[1].x() + 1 * kDt).margin(1e-4));
+  }
+}
+
+TEST_CASE(
+    "a fast body that starts overlapping another runs off past it or away from it instead of "
+    "sticking to it",
+    "[runtime][movement][sweep]") {
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  // Straight away from the other's centre, or past it, slightly closing
+  // but never nearer than its start.
+  const bool away = GENERATE(true, false);
+  INFO(methodName(method) << (away ? ", running away" : ", running past"));
+  const Vec3 start = away ? Vec3(0.3f, kStandY, 0) : Vec3(0, kStandY, 0.85f);
+  const Vec3 velocity = away ? Vec3(600, 0, 0) : Vec3(600, 0, -30);
+  Runway run(method, {{Vec3(0, kStandY, 0), Vec3::Zero()}, {start, velocity}});
+  run.step();
+  REQUIRE_FALSE(run.reports[1].stoppedByBody);
+  REQUIRE(run.bodies[1].position.x() > start.x() + 9.9f);
+}
+
+TEST_CASE("a fast body that met another off-centre keeps its speed along it and slides past",
+          "[runtime][movement][sweep]") {
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO(methodName(method));
+  // Aimed 0.6 m to the side of the other's centre (touching is 0.9 m).
+  Runway run(method,
+             {{Vec3(0, kStandY, 0), Vec3(600, 0, 0)}, {Vec3(5, kStandY, 0.6f), Vec3::Zero()}});
+  run.step();
+  REQUIRE(run.reports[0].stoppedByBody);
+  // What is left of its velocity runs along the other body, away from it.
+  REQUIRE(run.bodies[0].velocity.x() > 100);
+  REQUIRE(run.bodies[0].velocity.z() < -100);
+  REQUIRE(run.bodies[0].velocity.y() <= 0);
+  for (int frame = 0; frame < 5; ++frame) run.step();
+  REQUIRE(run.bodies[0].position.x() > run.bodies[1].position.x() + 5);
+}
+
+TEST_CASE("a fast body running into another's shoulder from above is not thrown upward",
+          "[runtime][movement][sweep]") {
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO(methodName(method));
+  // 0.6 m up in the air: the contact normal tilts up by about 35 degrees.
+  Runway run(method,
+             {{Vec3(0, kStandY + 0.6f, 0), Vec3(600, 0, 0)}, {Vec3(5, kStandY, 0), Vec3::Zero()}});
+  run.step();
+  REQUIRE(run.reports[0].stoppedByBody);
+  REQUIRE(run.bodies[0].velocity.x() < 600);
+  REQUIRE(run.bodies[0].velocity.y() <= 0);
+}
+
+TEST_CASE("a fast body stopped short by another is not passed through by a faster one behind it",
+          "[runtime][movement][sweep]") {
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO(methodName(method));
+  // The middle body (5 m a frame) meets the still one 0.42 of the way into
+  // the frame; the one behind (10 m a frame) would have met the middle one,
+  // had it gone on, at 0.62, past where it stopped: it must meet it stopped.
+  Runway run(method, {{Vec3(-4, kStandY, 0), Vec3(600, 0, 0)},
+                      {Vec3(0, kStandY, 0), Vec3(300, 0, 0)},
+                      {Vec3(3, kStandY, 0), Vec3::Zero()}});
+  const std::vector<Vec3> before = run.step();
+  for (int a = 0; a < 3; ++a)
+    for (int b = a + 1; b < 3; ++b) {
+      INFO("bodies " << a << " and " << b);
+      REQUIRE(closestApproach(before[a], run.bodies[a].position, before[b],
+                              run.bodies[b].position) >= kTouching - 1e-3f);
+      REQUIRE(run.bodies[a].position.x() < run.bodies[b].position.x());
+    }
+  for (int k = 0; k < 2; ++k) REQUIRE(run.reports[k].stoppedByBody);
+}
+
+TEST_CASE("stepping fast bodies on 1, 2 or 3 threads gives bit-identical trajectories",
+          "[runtime][threads][sweep]") {
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO(methodName(method));
+  // The packed crowd, every third body running at up to 400 m/s.
+  auto fastCrowd = [method] {
+    Crowd crowd = packedCrowd(method);
+    for (std::size_t i = 0; i < crowd.bodies.size(); i += 3) {
+      crowd.bodies[i].settings.maxHorizontalSpeed = 400;
+      crowd.forces[i] *= 400;
+    }
+    return crowd;
+  };
+  const int stopped = requireSameOnThreads(fastCrowd, 20, 3).second;
+  REQUIRE(stopped > 20);  // the sweep did work
 }
