@@ -88,13 +88,17 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
   // Fail fast: the tree can only add to this.
   checkBlobBytes(minimumBlobBytes(clean.vertices.size(), clean.triangles.size()), true, clean,
                  limits);
+  // Workers only when there is more than one thread to run on.
+  std::optional<bspf::ThreadPool> pool;
+  if (threadCount(settings) > 1) pool.emplace(threadCount(settings));
+  bspf::ThreadPool* threads = pool ? &*pool : nullptr;
   // A copy only when the reach rule is on: the mesh can be most of the
   // compile's memory.
   Mesh dropped;
   if (!settings.reach.from.empty()) {
     say(settings, kTreeFirstPercent, "drop faces no body can reach");
     dropped = timed(report.seconds.reach, report.cpuSeconds.reach, [&] {
-      return dropUnreachableFaces(clean, settings.reach, report.reach, report.warnings);
+      return dropUnreachableFaces(clean, settings.reach, report.reach, report.warnings, threads);
     });
   }
   const Mesh& reached = settings.reach.from.empty() ? clean : dropped;
@@ -107,10 +111,6 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
           kTreeFirstPercent + percent * (kTreeLastPercent - kTreeFirstPercent) / 100;
       if (overall > shown) say(settings, shown = overall, "build tree");
     };
-  // Workers only when there is more than one thread to run on.
-  std::optional<bspf::ThreadPool> pool;
-  if (threadCount(settings) > 1) pool.emplace(threadCount(settings));
-  bspf::ThreadPool* threads = pool ? &*pool : nullptr;
   const BspTree tree = timed(report.seconds.buildTree, report.cpuSeconds.buildTree, [&] {
     return buildTree(reached, settings.tree, treeProgress, threads);
   });

@@ -5,8 +5,10 @@
 // "Faces no body can touch".
 #include <bspc/reach.h>
 #include <bspf/geometry.h>
+#include <bspf/thread_pool.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -49,11 +51,21 @@ struct Grid {
   }
 };
 
+// A bit a cell. The passes over triangles run on several threads and set
+// bits of shared words: relaxed atomic reads and ORs, whose result (an OR)
+// does not depend on the order the threads run in.
 class Bits {
  public:
   explicit Bits(std::uint64_t count) : words_((count + 63) / 64, 0) {}
-  bool get(std::uint64_t i) const { return (words_[i >> 6] >> (i & 63)) & 1; }
-  void set(std::uint64_t i) { words_[i >> 6] |= std::uint64_t(1) << (i & 63); }
+  bool get(std::uint64_t i) const {
+    return (std::atomic_ref<const std::uint64_t>(words_[i >> 6]).load(std::memory_order_relaxed) >>
+            (i & 63)) &
+           1;
+  }
+  void set(std::uint64_t i) {
+    std::atomic_ref<std::uint64_t>(words_[i >> 6])
+        .fetch_or(std::uint64_t(1) << (i & 63), std::memory_order_relaxed);
+  }
 
  private:
   std::vector<std::uint64_t> words_;
@@ -147,7 +159,7 @@ std::vector<Vec3d> readReachPoints(const std::filesystem::path& file) {
 }
 
 Mesh dropUnreachableFaces(const Mesh& mesh, const ReachSettings& settings, ReachReport& report,
-                          std::vector<std::string>& warnings) {
+                          std::vector<std::string>& warnings, bspf::ThreadPool* pool) {
   report = ReachReport{};
   if (settings.from.empty() || mesh.triangles.empty()) return mesh;
   const Vec3d radii(settings.radiusXZ, settings.radiusY, settings.radiusXZ);
@@ -196,14 +208,26 @@ Mesh dropUnreachableFaces(const Mesh& mesh, const ReachSettings& settings, Reach
     b.low = a.cwiseMin(bv).cwiseMin(c), b.high = a.cwiseMax(bv).cwiseMax(c);
   }
 
+  // Triangles are handed out in chunks to the pool's threads (or all to
+  // this one): each pass's result is the same whichever thread did what.
+  const auto eachTriangle = [&](const auto& work) {
+    const auto range = [&](int, std::size_t first, std::size_t last) {
+      for (std::size_t t = first; t < last; ++t) work(t);
+    };
+    if (pool)
+      pool->parallelFor(body.size(), 64, range);
+    else
+      range(0, 0, body.size());
+  };
   Bits blocked(grid.count()), reached(grid.count());
-  for (const BodyTriangle& tri : body)
+  eachTriangle([&](std::size_t t) {
     forCellsNear(
-        grid, toBody, tri, blockReach, [&](std::uint64_t cell) { return !blocked.get(cell); },
+        grid, toBody, body[t], blockReach, [&](std::uint64_t cell) { return !blocked.get(cell); },
         [&](std::uint64_t cell) {
           blocked.set(cell);
           return true;
         });
+  });
 
   // The flood, depth first over the six neighbours of each cell.
   // Cell numbers fit 32 bits (maxCells <= 2^32): half the memory of a
@@ -244,15 +268,17 @@ Mesh dropUnreachableFaces(const Mesh& mesh, const ReachSettings& settings, Reach
 
   Mesh kept;
   kept.warnings = mesh.warnings;
-  std::vector<bool> keep(mesh.triangles.size(), false);
-  for (std::size_t t = 0; t < body.size(); ++t) {
+  // Bytes, not std::vector<bool>: threads write neighbouring entries.
+  std::vector<std::uint8_t> keptByte(mesh.triangles.size(), 0);
+  eachTriangle([&](std::size_t t) {
     forCellsNear(
         grid, toBody, body[t], keepReach, [&](std::uint64_t cell) { return reached.get(cell); },
         [&](std::uint64_t) {
-          keep[t] = true;
+          keptByte[t] = 1;
           return false;
         });
-  }
+  });
+  const std::vector<bool> keep(keptByte.begin(), keptByte.end());
   // The kept triangles in their order, with the vertices they use in theirs.
   std::vector<bool> used(mesh.vertices.size(), false);
   std::vector<std::uint32_t> newIndex(mesh.vertices.size(), 0);

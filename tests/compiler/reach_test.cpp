@@ -237,3 +237,22 @@ TEST_CASE("the faces --reach-from keeps keep their surfaces, and a surface left 
   CHECK(kept.surfaces == std::vector<std::string>{"stone"});
   CHECK(kept.triangleSurfaces == std::vector<std::uint32_t>(kept.triangles.size(), 0));
 }
+
+TEST_CASE("the reach stage keeps the same faces on any number of threads",
+          "[compiler][reach][threads]") {
+  bspc::Mesh mesh = room(1.2);
+  append(mesh, roomBeyond());
+  append(mesh, boxMesh({20, 0, 0}, {21, 1, 1}));
+  std::vector<std::string> warnings;
+  bspc::ReachReport report;
+  const bspc::Mesh alone =
+      bspc::dropUnreachableFaces(mesh, reachFrom({3, 1.5, 3}), report, warnings);
+  for (const int threads : {1, 2, 3}) {
+    bspf::ThreadPool pool(threads);
+    const bspc::Mesh shared =
+        bspc::dropUnreachableFaces(mesh, reachFrom({3, 1.5, 3}), report, warnings, &pool);
+    CHECK(shared.triangles == alone.triangles);
+    CHECK(shared.vertices == alone.vertices);
+  }
+  CHECK(alone.triangles.size() < mesh.triangles.size());
+}

@@ -5,6 +5,7 @@
 
 #include <bspc/mesh.h>
 #include <bspc/settings.h>
+#include <bspf/thread_pool.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -38,8 +39,11 @@ std::vector<Eigen::Vector3d> readReachPoints(const std::filesystem::path& file);
 /// is empty, and with a warning in `warnings` when the grid would be too
 /// large. Throws CompileError when a point is outside the mesh's bounds or
 /// within a body's size of a triangle (it is not a place a body can be).
-/// Deterministic; O(cells + the cells near each triangle).
+/// With a pool, the passes over the triangles are shared between its
+/// threads (the flood runs on this one); the result is the same on any
+/// number of threads. Deterministic; O(cells + the cells near each
+/// triangle).
 Mesh dropUnreachableFaces(const Mesh& mesh, const ReachSettings& settings, ReachReport& report,
-                          std::vector<std::string>& warnings);
+                          std::vector<std::string>& warnings, bspf::ThreadPool* pool = nullptr);
 
 }  // namespace bspc
