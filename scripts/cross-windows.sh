@@ -26,7 +26,7 @@ fi
 
 blobs="$build/sample-blobs"
 mkdir -p "$blobs"
-for name in arena; do
+for name in arena box_room slopes; do
   "$bspc" "samples/$name.obj" -o "$blobs/$name.bspf" >/dev/null
 done
 
