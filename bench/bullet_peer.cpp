@@ -97,7 +97,10 @@ void BulletPeer::step(Body& body, const Vec3& force, float dt, int maxIterations
     target = position + rest;
     ++report.iterations;
     if (slide.contactCount < kMaxReportedContacts)
-      slide.contacts[slide.contactCount++] = {worldNormal, worldNormal.y() >= walkableY};
+      // The peer knows no point or triangle of its contacts; only the
+      // normals feed the contact response.
+      slide.contacts[slide.contactCount++] = {worldNormal, worldNormal.y() >= walkableY, false,
+                                              Vec3::Zero(), kBodyContact};
   }
   body.position = fromBt(position).cwiseQuotient(toSphere);
   detail::respondToContacts(body, slide, dt);

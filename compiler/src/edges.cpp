@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include <bspc/edges.h>
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // dropCoveredFaces, classifyEdges and meetablePlanes: which faces and which
 // of a triangle's planes a body can meet, decided on small meshes.
 #include <bspc/clean.h>

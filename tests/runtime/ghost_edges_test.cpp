@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ghost edges: what bspc's edge classification and covered-face dropping
 // change for the runtime (docs/algorithm.md, "Ghost edges").
 #include <bspc/build_tree.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bspc/edges.h: the stage between clean and tree: faces no body can meet
 // are dropped, and each triangle edge is classified against the whole mesh,
 // so the runtime's planes method knows which of a triangle's planes a body
