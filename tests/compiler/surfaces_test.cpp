@@ -161,7 +161,7 @@ TEST_CASE("a mesh without materials has one surface named default", "[compiler][
   }
 }
 
-TEST_CASE("--drop-surface leaves out exactly the triangles of that surface",
+TEST_CASE("bspc --drop-surface leaves out exactly the triangles of that surface",
           "[compiler][surfaces]") {
   const fs::path dir = bspf::test::freshTempDir("surfaces");
   const fs::path obj = writeTwoMaterialObj(dir);
@@ -186,7 +186,8 @@ TEST_CASE("--drop-surface leaves out exactly the triangles of that surface",
   }
 }
 
-TEST_CASE("--only-surface keeps only the triangles of the named surfaces", "[compiler][surfaces]") {
+TEST_CASE("bspc --only-surface keeps only the triangles of the named surfaces",
+          "[compiler][surfaces]") {
   const fs::path dir = bspf::test::freshTempDir("surfaces");
   const fs::path obj = writeTwoMaterialObj(dir);
   const bspf::World world = compiledWith(dir, "--only-surface stone");
@@ -232,7 +233,8 @@ TEST_CASE("an unknown surface name is a one-line error naming the file and the n
   }
 }
 
-TEST_CASE("--drop-surface and --only-surface together are a usage error", "[compiler][surfaces]") {
+TEST_CASE("bspc --drop-surface and --only-surface together are a usage error",
+          "[compiler][surfaces]") {
   const fs::path dir = bspf::test::freshTempDir("surfaces");
   const fs::path obj = writeTwoMaterialObj(dir);
   const auto r = runBspc(quoted(obj) + " --drop-surface stone --only-surface grass -o " +

@@ -23,14 +23,24 @@ bspc::Mesh busyMesh() {
   bspc::Mesh mesh = bspf::test::boxMesh({-20, -1, -20}, {20, 0, 20});
   std::mt19937 rng(77);
   std::uniform_real_distribution<double> coordinate(-19, 19), offset(-0.6, 0.6);
+  // Draws in statements of their own: the order in which a call's arguments
+  // are evaluated is unspecified (GCC goes right to left, clang left to
+  // right), and the pinned tree below needs the same mesh from every
+  // compiler. z is drawn first, as GCC did when the figures were taken.
+  const auto draw = [&](auto& distribution) {
+    const double z = distribution(rng), y = distribution(rng), x = distribution(rng);
+    return Eigen::Vector3d(x, y, z);
+  };
   for (int i = 0; i < 40; ++i) {
-    const Eigen::Vector3d low(coordinate(rng), 0, coordinate(rng));
+    const double z = coordinate(rng), x = coordinate(rng);
+    const Eigen::Vector3d low(x, 0, z);
     bspf::test::append(mesh, bspf::test::boxMesh(low, low + Eigen::Vector3d(1, 2, 1.5)));
   }
   while (mesh.triangles.size() < 6000) {
-    const Eigen::Vector3d a(coordinate(rng), std::abs(coordinate(rng)) * 0.2, coordinate(rng));
-    const Eigen::Vector3d b = a + Eigen::Vector3d(offset(rng), offset(rng), offset(rng));
-    const Eigen::Vector3d c = a + Eigen::Vector3d(offset(rng), offset(rng), offset(rng));
+    Eigen::Vector3d a = draw(coordinate);
+    a.y() = std::abs(a.y()) * 0.2;
+    const Eigen::Vector3d b = a + draw(offset);
+    const Eigen::Vector3d c = a + draw(offset);
     if ((b - a).cross(c - a).norm() < 0.05) continue;
     const auto base = static_cast<std::uint32_t>(mesh.vertices.size());
     mesh.vertices.insert(mesh.vertices.end(), {a, b, c});
