@@ -34,10 +34,12 @@ std::size_t StepScratch::lastSlideCandidates() const {
 
 SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,
                               EllipsoidRadii radii, const MovementSettings& settings,
-                              float walkableNormalY, StepScratch& scratch) {
+                              float walkableNormalY, StepScratch& scratch,
+                              std::uint32_t groundHint) {
   return settings.method == CollisionMethod::ExactSweep
              ? slideExact(world, start, desiredEnd, radii, settings, walkableNormalY, scratch)
-             : slideWithPlanes(world, start, desiredEnd, radii, settings, walkableNormalY, scratch);
+             : slideWithPlanes(world, start, desiredEnd, radii, settings, walkableNormalY, scratch,
+                               groundHint);
 }
 
 namespace {
@@ -254,8 +256,9 @@ InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt
   detail::futureVelocity(body, force, dt);
   const Vec3 start = body.position;
   const float walkableY = walkableNormalY(body.settings);
-  SlideResult slide = slideAgainstLevel(world, start, start + body.velocity * dt, body.radii,
-                                        body.settings, walkableY, scratch);
+  SlideResult slide =
+      slideAgainstLevel(world, start, start + body.velocity * dt, body.radii, body.settings,
+                        walkableY, scratch, body.grounded ? body.groundTriangle : kNoTriangle);
   // A rounded body resting on a step's edge (not walkable ground, but
   // support) may step on as well.
   auto onEdge = [&slide] {
@@ -274,6 +277,9 @@ InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt
   body.position = slide.end;
   detail::respondToContacts(body, slide, dt);
   body.grounded = anyWalkable(slide);
+  body.groundTriangle = kNoTriangle;
+  for (int i = slide.contactCount - 1; i >= 0; --i)
+    if (slide.contacts[i].walkable) body.groundTriangle = slide.contacts[i].triangle;
   if (report) {
     recordSlide(world, report, slide, true);
     report->grounded = body.grounded;

@@ -29,14 +29,67 @@ struct Hit {
   bool found() const { return triangle != kNone; }
 };
 
-// The triangle in the way of the move start -> end with the lowest facing
-// value, if any (else !found()).
-Hit findBlockingTriangle(const World& world, const Vec3& start, const Vec3& end,
-                         EllipsoidRadii radii, const Bounds& swept, auto& local,
-                         std::span<const detail::CandidateBlock> blocks, float walkableNormalY) {
-  const Vec3 move = end - start;
-  const float moveLength = move.norm();
-  const Vec3 direction = moveLength > 0 ? Vec3(move / moveLength) : Vec3::Zero();
+// One move's values that every candidate's test reads.
+struct Move {
+  Vec3 start, end, step;  // step = end - start
+  Vec3 direction;         // unit, or zero for no move
+  EllipsoidRadii radii;
+  float walkableNormalY;
+};
+
+Move makeMove(const Vec3& start, const Vec3& end, EllipsoidRadii radii, float walkableNormalY) {
+  const Vec3 step = end - start;
+  const float length = step.norm();
+  return {start,          end, step, length > 0 ? Vec3(step / length) : Vec3::Zero(), radii,
+          walkableNormalY};
+}
+
+// Offers the candidate in `lane` of `block` to `best` if it blocks the move.
+// Precondition: the lane passed the planes method's mask (its box overlaps
+// the swept box, endSide < reach, startSide >= 0), whose side values (the
+// start's and end's signed distances to the face plane) are passed in.
+void offerLane(const World& world, const detail::CandidateBlock& block, int lane, float startSide,
+               float endSide, const Move& move, auto& local, Hit& best) {
+  detail::PlanesCold& candidate = local[block.slot[lane]];
+  const float reach = block.reach[lane];
+  if (!candidate.grown.ready)
+    detail::growPlanes(world, candidate.triangle, move.radii, candidate.grown);
+  // Test the six planes where the centre crosses the offset plane (the
+  // article leaves this position unspecified: testing the end lets fast
+  // bodies skip small triangles). A body already within it is tested at
+  // its start and at its end.
+  // `point`: where the planes were met.
+  Vec3 point = move.end;
+  bool inside;
+  if (startSide >= reach) {
+    const float f = (startSide - reach) / (startSide - endSide);
+    point = move.start + f * move.step;
+    inside = candidate.grown.inside(point);
+  } else if (candidate.grown.inside(move.start)) {
+    point = move.start;
+    inside = true;
+  } else {
+    inside = candidate.grown.inside(move.end);
+  }
+  if (!inside) return;
+  const Vec3 normal(block.normalX[lane], block.normalY[lane], block.normalZ[lane]);
+  // A steep face's squared-off edge that a rounded body rides over (a lip's
+  // top edge) does not block: the walkable face behind it holds the body
+  // (rounded_edges.h).
+  if (normal.y() < move.walkableNormalY &&
+      detail::ridesOverEdge(world, candidate.triangle, point, move.start, move.end, move.radii,
+                            move.walkableNormalY))
+    return;
+  const float facing = normal.dot(move.direction);
+  const std::uint32_t t = candidate.triangle;
+  if (!best.found() || facing < best.facing || (facing == best.facing && t < best.triangle))
+    best = Hit{t, facing, normal, block.distance[lane], reach};
+}
+
+// The triangle in the way of the move with the lowest facing value, if any
+// (else !found()).
+Hit findBlockingTriangle(const World& world, const Move& move, const Bounds& swept, auto& local,
+                         std::span<const detail::CandidateBlock> blocks) {
   Hit best;
   detail::LaneSides sides;
   for (const detail::CandidateBlock& block : blocks) {
@@ -44,46 +97,35 @@ Hit findBlockingTriangle(const World& world, const Vec3& start, const Vec3& end,
     // pre-check's two dot products, whose values it keeps); the six planes
     // only for the few lanes that pass (about 4 a scan on the shared
     // levels, most of them beside the triangle the body touches).
-    for (std::uint32_t bits = detail::planesMask(block, swept, start, end, sides); bits != 0;
-         bits &= bits - 1) {
+    for (std::uint32_t bits = detail::planesMask(block, swept, move.start, move.end, sides);
+         bits != 0; bits &= bits - 1) {
       const int lane = std::countr_zero(bits);
-      detail::PlanesCold& candidate = local[block.slot[lane]];
-      const float reach = block.reach[lane];
-      const float startSide = sides.start[lane], endSide = sides.end[lane];
-      if (!candidate.grown.ready)
-        detail::growPlanes(world, candidate.triangle, radii, candidate.grown);
-      // Test the six planes where the centre crosses the offset plane (the
-      // article leaves this position unspecified: testing the end lets fast
-      // bodies skip small triangles). A body already within it is tested at
-      // its start and at its end.
-      // `point`: where the planes were met.
-      Vec3 point = end;
-      bool inside;
-      if (startSide >= reach) {
-        const float f = (startSide - reach) / (startSide - endSide);
-        point = start + f * move;
-        inside = candidate.grown.inside(point);
-      } else if (candidate.grown.inside(start)) {
-        point = start;
-        inside = true;
-      } else {
-        inside = candidate.grown.inside(end);
-      }
-      if (!inside) continue;
-      const Vec3 normal(block.normalX[lane], block.normalY[lane], block.normalZ[lane]);
-      // A steep face's squared-off edge that a rounded body rides over
-      // (a lip's top edge) does not block: the walkable face behind it
-      // holds the body (rounded_edges.h).
-      if (normal.y() < walkableNormalY && detail::ridesOverEdge(world, candidate.triangle, point,
-                                                                start, end, radii, walkableNormalY))
-        continue;
-      const float facing = normal.dot(direction);
-      const std::uint32_t t = candidate.triangle;
-      if (!best.found() || facing < best.facing || (facing == best.facing && t < best.triangle))
-        best = Hit{t, facing, normal, block.distance[lane], block.reach[lane]};
+      offerLane(world, block, lane, sides.start[lane], sides.end[lane], move, local, best);
     }
   }
   return best;
+}
+
+// Whether triangle `hint` (among the candidates) blocks the move: the same
+// test findBlockingTriangle makes of each candidate, for this one alone.
+Hit testOneTriangle(const World& world, std::uint32_t hint, const Move& move, const Bounds& swept,
+                    auto& local) {
+  Hit hit;
+  const auto lane = local.laneOf(hint);
+  if (!lane) return hit;
+  const detail::CandidateBlock& block = *lane->first;
+  const int i = lane->second;
+  const bool overlaps = block.lowX[i] <= swept.high.x() && swept.low.x() <= block.highX[i] &&
+                        block.lowY[i] <= swept.high.y() && swept.low.y() <= block.highY[i] &&
+                        block.lowZ[i] <= swept.high.z() && swept.low.z() <= block.highZ[i];
+  auto side = [&](const Vec3& p) {
+    return block.normalX[i] * p.x() + block.normalY[i] * p.y() + block.normalZ[i] * p.z() -
+           block.distance[i];
+  };
+  const float startSide = side(move.start), endSide = side(move.end);
+  if (overlaps && endSide < block.reach[i] && startSide >= 0)
+    offerLane(world, block, i, startSide, endSide, move, local, hit);
+  return hit;
 }
 
 // A surface the end was moved out of this step: the end must keep
@@ -171,7 +213,7 @@ void growPlanes(const World& world, std::uint32_t triangle, EllipsoidRadii radii
 
 SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& desiredEnd,
                             EllipsoidRadii radii, const MovementSettings& settings,
-                            float walkableNormalY, StepScratch& scratch) {
+                            float walkableNormalY, StepScratch& scratch, std::uint32_t groundHint) {
   SlideResult result;
   result.end = desiredEnd;
   std::array<Constraint, kMaxReportedContacts> constraints;
@@ -186,9 +228,19 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
       [&](std::uint32_t triangle) { return detail::planesFaceTest(world, triangle, radii); });
   for (int iteration = 0;; ++iteration) {
     const Bounds swept = sweptBounds(start, result.end, radii);
-    const Hit hit = findBlockingTriangle(world, start, result.end, radii, swept, local,
-                                         local.around(world, swept, moveLength, radii, scratch),
-                                         walkableNormalY);
+    const Move move = makeMove(start, result.end, radii, walkableNormalY);
+    const std::span<const detail::CandidateBlock> blocks =
+        local.around(world, swept, moveLength, radii, scratch);
+    // A body standing on the ground meets it first: tested alone, the
+    // ground is met without the scan that would find it among the
+    // candidates, and the scan after it (which every slide makes before it
+    // ends) no longer finds every floor triangle under the body in reach.
+    // Any blocking triangle may be met first: the slide ends only when a
+    // whole scan finds none, so a stale hint costs one test, never safety.
+    Hit hit;
+    if (iteration == 0 && groundHint != kNoTriangle)
+      hit = testOneTriangle(world, groundHint, move, swept, local);
+    if (!hit.found()) hit = findBlockingTriangle(world, move, swept, local, blocks);
     if (!hit.found()) return result;
     if (iteration == settings.maxIterations) {
       // The six planes found no place for the end (a body held between
@@ -196,10 +248,12 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
       // whose rounded contacts have no such traps, makes the move from the
       // same start instead (docs/algorithm.md, "Ghost edges"); it refuses
       // only what it cannot place either.
-      SlideResult exact =
-          slideExact(world, start, desiredEnd, radii, settings, walkableNormalY, scratch);
-      exact.iterations += result.iterations;
-      return exact;
+      // (Assigned to `result`, so every path returns it: one result,
+      // never copied on return.)
+      const int iterations = result.iterations;
+      result = slideExact(world, start, desiredEnd, radii, settings, walkableNormalY, scratch);
+      result.iterations += iterations;
+      return result;
     }
     const Vec3& normal = hit.normal;
     const bool walkable = normal.y() >= walkableNormalY;

@@ -11,6 +11,8 @@
 #include <bit>
 #include <cmath>
 #include <numbers>
+#include <optional>
+#include <utility>
 
 #include "workspace.h"
 
@@ -47,9 +49,12 @@ struct SlideResult {
 };
 
 /// The article's method (CollisionMethod::Planes), defects fixed.
+/// `groundHint`: the triangle the body stood on (Body::groundTriangle), met
+/// first if it blocks the move; kNoTriangle for none.
 SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& desiredEnd,
                             EllipsoidRadii radii, const MovementSettings& settings,
-                            float walkableNormalY, StepScratch& scratch);
+                            float walkableNormalY, StepScratch& scratch,
+                            std::uint32_t groundHint = kNoTriangle);
 
 /// Exact continuous collision in unit-sphere space (CollisionMethod::ExactSweep).
 SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desiredEnd,
@@ -123,6 +128,18 @@ class LocalCandidates {
 
   Cold& operator[](std::uint32_t slot) { return made_.cold[slot]; }
 
+  /// Where triangle `t` is among the candidates (made by the last around()):
+  /// its block and lane, or nothing when it is not a candidate. The
+  /// candidates are in triangle order, so a binary search finds it.
+  std::optional<std::pair<const detail::CandidateBlock*, int>> laneOf(std::uint32_t t) const {
+    const auto it = std::lower_bound(
+        made_.cold.begin(), made_.cold.end(), t,
+        [](const Cold& cold, std::uint32_t triangle) { return cold.triangle < triangle; });
+    if (it == made_.cold.end() || it->triangle != t) return std::nullopt;
+    const std::size_t slot = std::size_t(it - made_.cold.begin());
+    return std::pair{&made_.blocks[slot / detail::kBlockLanes], int(slot % detail::kBlockLanes)};
+  }
+
  private:
   // Makes the candidates of the nearby triangles, in triangle order
   // whatever order the query listed them in (which depends on the box it
@@ -159,10 +176,12 @@ class LocalCandidates {
   std::span<const detail::CandidateBlock> current_;
 };
 
-/// The narrow phase `settings.method` names.
+/// The narrow phase `settings.method` names. `groundHint`: see
+/// slideWithPlanes (the exact sweep ignores it).
 SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,
                               EllipsoidRadii radii, const MovementSettings& settings,
-                              float walkableNormalY, StepScratch& scratch);
+                              float walkableNormalY, StepScratch& scratch,
+                              std::uint32_t groundHint = kNoTriangle);
 
 /// The least normal y of a walkable contact: cos(walkableSlopeDegrees).
 inline float walkableNormalY(const MovementSettings& s) {

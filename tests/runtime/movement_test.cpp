@@ -28,6 +28,13 @@ bspc::Mesh floorWithWall() {
   return mesh;
 }
 
+// The floor with a wall at x = 5 and another at z = 5: a 90 degree corner.
+bspc::Mesh floorWithCorner() {
+  bspc::Mesh mesh = floorWithWall();
+  bspf::test::append(mesh, bspf::test::boxMesh({-20, 0, 5}, {6, 4, 6}));
+  return mesh;
+}
+
 // A slab whose top face is a slope rising along +z at `degrees`, with its
 // foot line at z = 0, y = 0.
 bspc::Mesh slope(double degrees) {
@@ -314,9 +321,7 @@ TEST_CASE("a step height never lets a body walk up a slope too steep to walk",
 TEST_CASE("a body pushed into a 90 degree corner settles", "[runtime][movement]") {
   const bspf::CollisionMethod method = eachMethod();
   INFO("method " << nameOf(method));
-  bspc::Mesh mesh = floorWithWall();
-  bspf::test::append(mesh, bspf::test::boxMesh({-20, 0, 5}, {6, 4, 6}));
-  const Level level(mesh);
+  const Level level(floorWithCorner());
   bspf::StepScratch scratch;
   Body body = walker({0, 0.9f, 0}, method);
   const Vec3 push(40, 0, 40);
@@ -1354,4 +1359,69 @@ TEST_CASE("findSurface finds a surface by its exact name and nothing else",
   CHECK_FALSE(world.findSurface("Grass").has_value());
   CHECK_FALSE(world.findSurface("").has_value());
   CHECK(world.triangleSurfaces().size() == world.triangles().size());
+}
+
+TEST_CASE(
+    "a grounded body's step records its ground triangle, and a walking step with that "
+    "hint ends where one without it does",
+    "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  const Level level(floorSlab());
+  bspf::StepScratch scratch;
+  Body body = walker({0, 0.9f, 0}, method);
+  CHECK(body.groundTriangle == bspf::kNoTriangle);
+  run(level.world, body, Vec3::Zero(), 30, scratch);
+  REQUIRE(body.grounded);
+  REQUIRE(body.groundTriangle < level.world.triangles().size());
+  // The triangle is the slab's top: a face whose plane is y = 0.
+  const auto& face = level.world.trianglePlanes()[body.groundTriangle].face();
+  CHECK(face.normal().y() == Approx(1));
+  for (int frame = 0; frame < 60; ++frame) {
+    Body hinted = body, unhinted = body;
+    unhinted.groundTriangle = bspf::kNoTriangle;
+    const Vec3 force(30, 0, 12);
+    bspf::stepBody(level.world, hinted, force, kDt, scratch);
+    bspf::stepBody(level.world, unhinted, force, kDt, scratch);
+    INFO("frame " << frame);
+    // On a flat floor only the floor blocks a walking move: met first by
+    // hint or by scan, it leaves the same end.
+    REQUIRE(hinted.position == unhinted.position);
+    REQUIRE(hinted.velocity == unhinted.velocity);
+    REQUIRE(hinted.groundTriangle < level.world.triangles().size());
+    body = hinted;
+  }
+}
+
+TEST_CASE("a wrong ground triangle hint never lets a body into a wall or a floor",
+          "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  const Level level(floorWithCorner());
+  bspf::StepScratch scratch;
+  // A body walking into the corner of the two walls, settled there.
+  Body settled = walker({0, 0.9f, 0}, method);
+  const Vec3 push(40, 0, 40);
+  run(level.world, settled, push, 120, scratch);
+  REQUIRE(settled.grounded);
+  const auto triangleCount = std::uint32_t(level.world.triangles().size());
+  std::vector<std::uint32_t> hints = {bspf::kNoTriangle, triangleCount, triangleCount + 7,
+                                      0x7FFFFFFFu};
+  for (std::uint32_t t = 0; t < triangleCount; ++t) hints.push_back(t);
+  for (const std::uint32_t hint : hints) {
+    INFO("hint " << hint);
+    Body body = settled;
+    body.groundTriangle = hint;
+    for (int frame = 0; frame < 20; ++frame) {
+      bspf::StepReport report;
+      bspf::stepBody(level.world, body, push, kDt, scratch, &report);
+      REQUIRE(!report.refused);
+      // The body stays out of both walls and on the floor (skin 1 mm).
+      REQUIRE(body.position.x() <= 5 - 0.45f + 1e-3f);
+      REQUIRE(body.position.z() <= 5 - 0.45f + 1e-3f);
+      REQUIRE(body.position.y() >= 0.85f - 1e-3f);
+      REQUIRE(body.position.y() <= 0.85f + 0.01f);
+      REQUIRE(body.grounded);
+    }
+  }
 }
