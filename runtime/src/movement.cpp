@@ -35,11 +35,11 @@ std::size_t StepScratch::lastSlideCandidates() const {
 SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,
                               EllipsoidRadii radii, const MovementSettings& settings,
                               float walkableNormalY, StepScratch& scratch,
-                              std::uint32_t groundHint) {
+                              std::span<const std::uint32_t> hints) {
   return settings.method == CollisionMethod::ExactSweep
              ? slideExact(world, start, desiredEnd, radii, settings, walkableNormalY, scratch)
              : slideWithPlanes(world, start, desiredEnd, radii, settings, walkableNormalY, scratch,
-                               groundHint);
+                               hints);
 }
 
 namespace {
@@ -116,6 +116,23 @@ void snapToGround(const World& world, const Body& body, const Vec3& move, float 
       // A full list keeps the ground, which decides the ground state.
       slide.contacts[kMaxReportedContacts - 1] = down.contacts[i];
       break;
+    }
+  }
+}
+
+// Body::touchedTriangles after `slide`: its contacts' triangles, each once,
+// walkable ones first (the ground, met first by a walking body's next step).
+void rememberTouched(const SlideResult& slide, Body& body) {
+  std::fill(body.touchedTriangles.begin(), body.touchedTriangles.end(), kNoTriangle);
+  std::size_t count = 0;
+  for (const bool walkable : {true, false}) {
+    for (int i = 0; i < slide.contactCount && count < body.touchedTriangles.size(); ++i) {
+      const std::uint32_t t = slide.contacts[i].triangle;
+      if (slide.contacts[i].walkable != walkable ||
+          std::find(body.touchedTriangles.begin(), body.touchedTriangles.begin() + count, t) !=
+              body.touchedTriangles.begin() + count)
+        continue;
+      body.touchedTriangles[count++] = t;
     }
   }
 }
@@ -256,9 +273,8 @@ InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt
   detail::futureVelocity(body, force, dt);
   const Vec3 start = body.position;
   const float walkableY = walkableNormalY(body.settings);
-  SlideResult slide =
-      slideAgainstLevel(world, start, start + body.velocity * dt, body.radii, body.settings,
-                        walkableY, scratch, body.grounded ? body.groundTriangle : kNoTriangle);
+  SlideResult slide = slideAgainstLevel(world, start, start + body.velocity * dt, body.radii,
+                                        body.settings, walkableY, scratch, body.touchedTriangles);
   // A rounded body resting on a step's edge (not walkable ground, but
   // support) may step on as well.
   auto onEdge = [&slide] {
@@ -277,9 +293,7 @@ InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt
   body.position = slide.end;
   detail::respondToContacts(body, slide, dt);
   body.grounded = anyWalkable(slide);
-  body.groundTriangle = kNoTriangle;
-  for (int i = slide.contactCount - 1; i >= 0; --i)
-    if (slide.contacts[i].walkable) body.groundTriangle = slide.contacts[i].triangle;
+  rememberTouched(slide, body);
   if (report) {
     recordSlide(world, report, slide, true);
     report->grounded = body.grounded;

@@ -4,6 +4,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <bit>
+#include <cassert>
 #include <cmath>
 #include <limits>
 
@@ -106,13 +107,12 @@ Hit findBlockingTriangle(const World& world, const Move& move, const Bounds& swe
   return best;
 }
 
-// Whether triangle `hint` (among the candidates) blocks the move: the same
-// test findBlockingTriangle makes of each candidate, for this one alone.
-Hit testOneTriangle(const World& world, std::uint32_t hint, const Move& move, const Bounds& swept,
-                    auto& local) {
-  Hit hit;
-  const auto lane = local.laneOf(hint);
-  if (!lane) return hit;
+// Offers triangle `t` to `best` if it is a candidate and blocks the move:
+// the test findBlockingTriangle makes of each candidate, for this one alone.
+void offerTriangle(const World& world, std::uint32_t t, const Move& move, const Bounds& swept,
+                   auto& local, Hit& best) {
+  const auto lane = local.laneOf(t);
+  if (!lane) return;
   const detail::CandidateBlock& block = *lane->first;
   const int i = lane->second;
   const bool overlaps = block.lowX[i] <= swept.high.x() && swept.low.x() <= block.highX[i] &&
@@ -124,8 +124,7 @@ Hit testOneTriangle(const World& world, std::uint32_t hint, const Move& move, co
   };
   const float startSide = side(move.start), endSide = side(move.end);
   if (overlaps && endSide < block.reach[i] && startSide >= 0)
-    offerLane(world, block, i, startSide, endSide, move, local, hit);
-  return hit;
+    offerLane(world, block, i, startSide, endSide, move, local, best);
 }
 
 // A surface the end was moved out of this step: the end must keep
@@ -213,7 +212,8 @@ void growPlanes(const World& world, std::uint32_t triangle, EllipsoidRadii radii
 
 SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& desiredEnd,
                             EllipsoidRadii radii, const MovementSettings& settings,
-                            float walkableNormalY, StepScratch& scratch, std::uint32_t groundHint) {
+                            float walkableNormalY, StepScratch& scratch,
+                            std::span<const std::uint32_t> hints) {
   SlideResult result;
   result.end = desiredEnd;
   std::array<Constraint, kMaxReportedContacts> constraints;
@@ -226,20 +226,28 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
   LocalCandidates local(
       detail::activePlanes(workspace), workspace.listed, workspace.sorted,
       [&](std::uint32_t triangle) { return detail::planesFaceTest(world, triangle, radii); });
+  assert(hints.size() <= 32);
+  std::uint32_t hintsTested = 0;  // bit k: hints[k] was tested
   for (int iteration = 0;; ++iteration) {
     const Bounds swept = sweptBounds(start, result.end, radii);
     const Move move = makeMove(start, result.end, radii, walkableNormalY);
     const std::span<const detail::CandidateBlock> blocks =
         local.around(world, swept, moveLength, radii, scratch);
-    // A body standing on the ground meets it first: tested alone, the
-    // ground is met without the scan that would find it among the
-    // candidates, and the scan after it (which every slide makes before it
-    // ends) no longer finds every floor triangle under the body in reach.
-    // Any blocking triangle may be met first: the slide ends only when a
-    // whole scan finds none, so a stale hint costs one test, never safety.
+    // The triangles the body met last step (its ground, the wall it walks
+    // into) are most often what blocks it again: tested alone, each is met
+    // without the scan that would find it among the candidates (and that,
+    // before a body's ground is met, finds every floor triangle under it in
+    // reach). Any blocking triangle may be met first: the slide ends only
+    // when a whole scan finds none, so a stale hint costs one test, never
+    // safety. Each hint is tested once, in order, until one blocks: one
+    // that did not block, or was met, seldom blocks later in the slide
+    // (each slide moves the end out of what it met).
     Hit hit;
-    if (iteration == 0 && groundHint != kNoTriangle)
-      hit = testOneTriangle(world, groundHint, move, swept, local);
+    for (std::size_t k = 0; k < hints.size() && !hit.found(); ++k) {
+      if (hints[k] == kNoTriangle || (hintsTested & (1u << k))) continue;
+      hintsTested |= 1u << k;
+      offerTriangle(world, hints[k], move, swept, local, hit);
+    }
     if (!hit.found()) hit = findBlockingTriangle(world, move, swept, local, blocks);
     if (!hit.found()) return result;
     if (iteration == settings.maxIterations) {

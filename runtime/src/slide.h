@@ -49,12 +49,13 @@ struct SlideResult {
 };
 
 /// The article's method (CollisionMethod::Planes), defects fixed.
-/// `groundHint`: the triangle the body stood on (Body::groundTriangle), met
-/// first if it blocks the move; kNoTriangle for none.
+/// `hints`: triangles to test before scanning the candidates, each met
+/// first if it blocks (the body's Body::touchedTriangles; kNoTriangle
+/// entries are skipped). At most 32.
 SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& desiredEnd,
                             EllipsoidRadii radii, const MovementSettings& settings,
                             float walkableNormalY, StepScratch& scratch,
-                            std::uint32_t groundHint = kNoTriangle);
+                            std::span<const std::uint32_t> hints = {});
 
 /// Exact continuous collision in unit-sphere space (CollisionMethod::ExactSweep).
 SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desiredEnd,
@@ -67,7 +68,7 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
 /// query nothing. Larger pads query less often but list more triangles for
 /// every scan. Measured on walkers (callgrind, instructions per step, oa_dm1,
 /// oa_dm5, oacmpctf3, both methods) once a grounded body's scans stopped
-/// listing its floor (Body::groundTriangle): against move + 0.15 m, this is
+/// listing its floor (Body::touchedTriangles): against move + 0.15 m, this is
 /// 2 to 5% cheaper at 6 m/s and within 2% at 40 m/s; move + 0.25 and
 /// move + 0.35 were as cheap at 6 m/s but 3 and 6% dearer at 40.
 inline float nearbyPad(float moveLength) { return 0.5f * moveLength + 0.3f; }
@@ -178,12 +179,12 @@ class LocalCandidates {
   std::span<const detail::CandidateBlock> current_;
 };
 
-/// The narrow phase `settings.method` names. `groundHint`: see
-/// slideWithPlanes (the exact sweep ignores it).
+/// The narrow phase `settings.method` names. `hints`: see slideWithPlanes
+/// (the exact sweep ignores them).
 SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,
                               EllipsoidRadii radii, const MovementSettings& settings,
                               float walkableNormalY, StepScratch& scratch,
-                              std::uint32_t groundHint = kNoTriangle);
+                              std::span<const std::uint32_t> hints = {});
 
 /// The least normal y of a walkable contact: cos(walkableSlopeDegrees).
 inline float walkableNormalY(const MovementSettings& s) {

@@ -1362,39 +1362,44 @@ TEST_CASE("findSurface finds a surface by its exact name and nothing else",
 }
 
 TEST_CASE(
-    "a grounded body's step records its ground triangle, and a walking step with that "
-    "hint ends where one without it does",
+    "a body's step records the triangles it met, ground first, and a walking step with "
+    "them as hints ends where one without them does",
     "[runtime][movement]") {
   const bspf::CollisionMethod method = eachMethod();
   INFO("method " << nameOf(method));
-  const Level level(floorSlab());
+  const Level level(floorWithWall());
   bspf::StepScratch scratch;
   Body body = walker({0, 0.9f, 0}, method);
-  CHECK(body.groundTriangle == bspf::kNoTriangle);
+  CHECK(body.touchedTriangles == bspf::kNoTouchedTriangles);
   run(level.world, body, Vec3::Zero(), 30, scratch);
   REQUIRE(body.grounded);
-  REQUIRE(body.groundTriangle < level.world.triangles().size());
-  // The triangle is the slab's top: a face whose plane is y = 0.
-  const auto& face = level.world.trianglePlanes()[body.groundTriangle].face();
-  CHECK(face.normal().y() == Approx(1));
-  for (int frame = 0; frame < 60; ++frame) {
+  auto normalY = [&](std::uint32_t t) {
+    REQUIRE(t < level.world.triangles().size());
+    return level.world.trianglePlanes()[t].face().normal().y();
+  };
+  CHECK(normalY(body.touchedTriangles[0]) == Approx(1));
+  CHECK(body.touchedTriangles[1] == bspf::kNoTriangle);
+  // Walking into the wall at x = 5 and along it: the floor and the wall.
+  const Vec3 force(40, 0, 12);
+  for (int frame = 0; frame < 120; ++frame) {
     Body hinted = body, unhinted = body;
-    unhinted.groundTriangle = bspf::kNoTriangle;
-    const Vec3 force(30, 0, 12);
+    unhinted.touchedTriangles = bspf::kNoTouchedTriangles;
     bspf::stepBody(level.world, hinted, force, kDt, scratch);
     bspf::stepBody(level.world, unhinted, force, kDt, scratch);
     INFO("frame " << frame);
-    // On a flat floor only the floor blocks a walking move: met first by
-    // hint or by scan, it leaves the same end.
+    // Only the floor and the wall block: met first by hint or by scan,
+    // they leave the same end (the wall is upright, so the order they are
+    // met in does not change it).
     REQUIRE(hinted.position == unhinted.position);
     REQUIRE(hinted.velocity == unhinted.velocity);
-    REQUIRE(hinted.groundTriangle < level.world.triangles().size());
     body = hinted;
   }
+  CHECK(body.position.x() == Approx(5 - 0.45f).margin(2e-3));
+  CHECK(normalY(body.touchedTriangles[0]) == Approx(1));
+  CHECK(normalY(body.touchedTriangles[1]) == Approx(0).margin(1e-6));
 }
 
-TEST_CASE("a wrong ground triangle hint never lets a body into a wall or a floor",
-          "[runtime][movement]") {
+TEST_CASE("wrong triangle hints never let a body into a wall or a floor", "[runtime][movement]") {
   const bspf::CollisionMethod method = eachMethod();
   INFO("method " << nameOf(method));
   const Level level(floorWithCorner());
@@ -1408,20 +1413,26 @@ TEST_CASE("a wrong ground triangle hint never lets a body into a wall or a floor
   std::vector<std::uint32_t> hints = {bspf::kNoTriangle, triangleCount, triangleCount + 7,
                                       0x7FFFFFFFu};
   for (std::uint32_t t = 0; t < triangleCount; ++t) hints.push_back(t);
-  for (const std::uint32_t hint : hints) {
-    INFO("hint " << hint);
-    Body body = settled;
-    body.groundTriangle = hint;
-    for (int frame = 0; frame < 20; ++frame) {
-      bspf::StepReport report;
-      bspf::stepBody(level.world, body, push, kDt, scratch, &report);
-      REQUIRE(!report.refused);
-      // The body stays out of both walls and on the floor (skin 1 mm).
-      REQUIRE(body.position.x() <= 5 - 0.45f + 1e-3f);
-      REQUIRE(body.position.z() <= 5 - 0.45f + 1e-3f);
-      REQUIRE(body.position.y() >= 0.85f - 1e-3f);
-      REQUIRE(body.position.y() <= 0.85f + 0.01f);
-      REQUIRE(body.grounded);
+  for (std::size_t k = 0; k < hints.size(); ++k) {
+    // Each wrong value alone, and with three others.
+    for (const bool alone : {true, false}) {
+      Body body = settled;
+      body.touchedTriangles = bspf::kNoTouchedTriangles;
+      for (std::size_t j = 0; j < (alone ? 1 : 4); ++j)
+        body.touchedTriangles[j] = hints[(k + 5 * j) % hints.size()];
+      INFO("hints " << body.touchedTriangles[0] << " " << body.touchedTriangles[1] << " "
+                    << body.touchedTriangles[2] << " " << body.touchedTriangles[3]);
+      for (int frame = 0; frame < 20; ++frame) {
+        bspf::StepReport report;
+        bspf::stepBody(level.world, body, push, kDt, scratch, &report);
+        REQUIRE(!report.refused);
+        // The body stays out of both walls and on the floor (skin 1 mm).
+        REQUIRE(body.position.x() <= 5 - 0.45f + 1e-3f);
+        REQUIRE(body.position.z() <= 5 - 0.45f + 1e-3f);
+        REQUIRE(body.position.y() >= 0.85f - 1e-3f);
+        REQUIRE(body.position.y() <= 0.85f + 0.01f);
+        REQUIRE(body.grounded);
+      }
     }
   }
 }
