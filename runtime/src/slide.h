@@ -85,7 +85,7 @@ template <typename Cold, typename Make>
 class LocalCandidates {
  public:
   LocalCandidates(detail::MadeCandidates<Cold>& made, std::vector<detail::CandidateBlock>& listed,
-                  std::vector<CandidateTriangle>& sorted, Make make)
+                  std::vector<std::uint64_t>& sorted, Make make)
       : made_(made), listed_(listed), sorted_(sorted), make_(make) {}
 
   /// Blocks holding (at least) the candidates whose box may overlap
@@ -149,15 +149,18 @@ class LocalCandidates {
   // was made for): ties in the narrow phases then resolve the same with a
   // fresh query as with a body's older one.
   void remake(const NearbyTriangles& nearby, EllipsoidRadii radii) {
-    sorted_.assign(nearby.list().begin(), nearby.list().end());
-    std::sort(sorted_.begin(), sorted_.end(),
-              [](const CandidateTriangle& a, const CandidateTriangle& b) {
-                return a.triangle < b.triangle;
-              });
+    // Sorted as keys (triangle, then its place in the list) rather than as
+    // the 28-byte entries: a third of a query's cost at 40 m/s went to
+    // swapping those.
+    const std::span<const CandidateTriangle> list = nearby.list();
+    sorted_.resize(list.size());
+    for (std::size_t i = 0; i < list.size(); ++i)
+      sorted_[i] = std::uint64_t(list[i].triangle) << 32 | std::uint32_t(i);
+    std::sort(sorted_.begin(), sorted_.end());
     made_.blocks.resize((sorted_.size() + detail::kBlockLanes - 1) / detail::kBlockLanes);
     made_.cold.resize(sorted_.size());
     for (std::uint32_t slot = 0; slot < sorted_.size(); ++slot) {
-      const CandidateTriangle& c = sorted_[slot];
+      const CandidateTriangle& c = list[std::uint32_t(sorted_[slot])];
       detail::setLane(made_.blocks[slot / detail::kBlockLanes], int(slot % detail::kBlockLanes),
                       c.low, c.high, make_(c.triangle), slot);
       made_.cold[slot].reset(c.triangle);
@@ -171,7 +174,7 @@ class LocalCandidates {
   static constexpr std::size_t kScanWholeBlocks = 6;
   detail::MadeCandidates<Cold>& made_;
   std::vector<detail::CandidateBlock>& listed_;
-  std::vector<CandidateTriangle>& sorted_;
+  std::vector<std::uint64_t>& sorted_;
   Make make_;
   Bounds local_;
   bool valid_ = false;

@@ -242,8 +242,9 @@ struct StepWorkspace {
   /// The current slide's candidates: the lanes of planes or exact whose box
   /// overlaps the slide's local box, packed.
   std::vector<CandidateBlock> listed;
-  /// The nearby triangles sorted by triangle, while making candidates.
-  std::vector<CandidateTriangle> sorted;
+  /// The nearby triangles sorted by triangle, while making candidates:
+  /// triangle << 32 | the triangle's place in NearbyTriangles::list().
+  std::vector<std::uint64_t> sorted;
   /// The exact sweep's candidates whose edges an iteration may still test:
   /// (the earliest time their face stage allows, slot).
   std::vector<std::pair<double, std::uint32_t>> open;
