@@ -7,6 +7,8 @@
 #include <cassert>
 #include <cmath>
 
+#include "stored_box.h"
+
 namespace bspf {
 
 namespace {
@@ -109,6 +111,7 @@ class CandidateGather {
     const std::span<const std::uint32_t> references = world_.leafTriangles();
     const std::span<const schema::Box> bounds = world_.leafTriangleBounds();
     const std::uint32_t generation = scratch_.generation_;
+    const detail::StoredBoxTest test(low, high);
     for (const std::uint32_t leafIndex : scratch_.leaves) {
       const schema::Leaf& leaf = world_.leaves()[leafIndex];
       const std::uint32_t end = leaf.first() + leaf.count();
@@ -116,9 +119,7 @@ class CandidateGather {
       // triangle's stamp or planes are touched.
       for (std::uint32_t i = leaf.first(); i < end; ++i) {
         const schema::Box& box = bounds[i];
-        if (box.min().x() > high.x() || box.max().x() < low.x() || box.min().y() > high.y() ||
-            box.max().y() < low.y() || box.min().z() > high.z() || box.max().z() < low.z())
-          continue;
+        if (!test.overlaps(box)) continue;
         const std::uint32_t triangle = references[i];
         if (scratch_.stamp_[triangle] == generation) continue;
         scratch_.stamp_[triangle] = generation;

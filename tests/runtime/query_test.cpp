@@ -6,6 +6,7 @@
 #include <optional>
 #include <random>
 
+#include "stored_box.h"
 #include "support/exact_geometry.h"
 #include "support/test_support.h"
 
@@ -368,4 +369,41 @@ TEST_CASE(
   // Both paths taken many times.
   REQUIRE(reused > 300);
   REQUIRE(expectedQueries > 200);
+}
+
+TEST_CASE("the gather's stored-box test agrees with the plain overlap test, touching included",
+          "[runtime][query]") {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-3, 3);
+  std::uniform_int_distribution<int> pick(0, 5);
+  int overlapping = 0, touching = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const Vec3 a(u(rng), u(rng), u(rng)), b(u(rng), u(rng), u(rng));
+    const Vec3 low = a.cwiseMin(b), high = a.cwiseMax(b);
+    const Vec3 c(u(rng), u(rng), u(rng)), d(u(rng), u(rng), u(rng));
+    Vec3 boxLow = c.cwiseMin(d), boxHigh = c.cwiseMax(d);
+    // A third of the boxes share a face plane with the query box: on the
+    // low or high side of one axis, from either side.
+    if (k % 3 == 0) {
+      const int axis = pick(rng) % 3;
+      if (pick(rng) % 2 == 0) {
+        boxHigh[axis] = low[axis];
+        boxLow[axis] = std::min(boxLow[axis], boxHigh[axis]);
+      } else {
+        boxLow[axis] = high[axis];
+        boxHigh[axis] = std::max(boxHigh[axis], boxLow[axis]);
+      }
+    }
+    const bspf::schema::Box box({boxLow.x(), boxLow.y(), boxLow.z()},
+                                {boxHigh.x(), boxHigh.y(), boxHigh.z()});
+    const bool expected = bspf::detail::storedBoxOverlapsScalar(box, low, high);
+    INFO("case " << k);
+    REQUIRE(bspf::detail::StoredBoxTest(low, high).overlaps(box) == expected);
+    overlapping += expected;
+    touching += expected && k % 3 == 0;
+  }
+  // Both outcomes, and touching boxes, were tested.
+  CHECK(overlapping > 1000);
+  CHECK(overlapping < 19000);
+  CHECK(touching > 500);
 }
