@@ -23,6 +23,8 @@ namespace {
 struct Hit {
   static constexpr std::uint32_t kNone = ~std::uint32_t(0);
   std::uint32_t triangle = kNone;
+  // normal · the move (not its direction: the order is the same, and no
+  // square root sits on the scan's path).
   float facing = 0;
   Vec3 normal = Vec3::Zero();
   float distance = 0;
@@ -33,16 +35,12 @@ struct Hit {
 // One move's values that every candidate's test reads.
 struct Move {
   Vec3 start, end, step;  // step = end - start
-  Vec3 direction;         // unit, or zero for no move
   EllipsoidRadii radii;
   float walkableNormalY;
 };
 
 Move makeMove(const Vec3& start, const Vec3& end, EllipsoidRadii radii, float walkableNormalY) {
-  const Vec3 step = end - start;
-  const float length = step.norm();
-  return {start,          end, step, length > 0 ? Vec3(step / length) : Vec3::Zero(), radii,
-          walkableNormalY};
+  return {start, end, end - start, radii, walkableNormalY};
 }
 
 // Offers the candidate in `lane` of `block` to `best` if it blocks the move.
@@ -81,7 +79,7 @@ void offerLane(const World& world, const detail::CandidateBlock& block, int lane
       detail::ridesOverEdge(world, candidate.triangle, point, move.start, move.end, move.radii,
                             move.walkableNormalY))
     return;
-  const float facing = normal.dot(move.direction);
+  const float facing = normal.dot(move.step);
   const std::uint32_t t = candidate.triangle;
   if (!best.found() || facing < best.facing || (facing == best.facing && t < best.triangle))
     best = Hit{t, facing, normal, block.distance[lane], reach};
