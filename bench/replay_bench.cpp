@@ -17,7 +17,8 @@
 //   - measured, untimed, in one more replay: tree queries per step
 //     (NearbyTriangles::queries: most steps reuse the agent's last query), the
 //     candidates the narrow phase tested in the step's last slide
-//     (StepScratch::lastSlideCandidates after the step; multi_query_steps is the
+//     (StepScratch::lastSlideCandidates after the step; the lanes its scans went
+//     through, a short list whole: lastSlideScannedLanes; multi_query_steps is the
 //     fraction of steps that queried the tree more than once), and, by brute force over every
 //     triangle's bounding box, the triangles whose box overlaps the unpadded box of the ellipsoid
 //     swept from the step's start to its desired end (position + the velocity of the runtime's own
@@ -147,6 +148,7 @@ struct QueryFigures {
   double queriesPerStep = 0;
   double multiQueryStepsFraction = 0;  // steps that queried the tree more than once
   double candidatesMean = 0, candidatesP90 = 0;
+  double scannedMean = 0;         // lanes the last slide's scans went through (a short list whole)
   long long bruteForceEvery = 1;  // k: every k-th step was brute-forced
   long long bruteForceSteps = 0;
   double overlappingMean = 0;
@@ -167,6 +169,7 @@ QueryFigures measureQueries(const World& world, const Recording& recording, floa
   std::vector<bspf::NearbyTriangles> agentNearby(recording.agents);
   std::vector<double> candidates;
   long long queries = 0, multiQuery = 0;
+  double scannedSum = 0;
   double sampledCandidates = 0, sampledOverlapping = 0, ratioSum = 0;
   long long ratioCount = 0;
   for (long long i = 0; i < steps; ++i) {
@@ -180,6 +183,7 @@ QueryFigures measureQueries(const World& world, const Recording& recording, floa
     multiQuery += made > 1;
     const double listed = double(scratch.lastSlideCandidates());
     candidates.push_back(listed);
+    scannedSum += double(scratch.lastSlideScannedLanes());
     if (i % figures.bruteForceEvery != 0) continue;
     Body moved = recorded.body;
     bspf::detail::futureVelocity(moved, recorded.force, dt);
@@ -205,6 +209,7 @@ QueryFigures measureQueries(const World& world, const Recording& recording, floa
     double sum = 0;
     for (const double c : candidates) sum += c;
     figures.candidatesMean = sum / double(candidates.size());
+    figures.scannedMean = scannedSum / double(candidates.size());
     const std::size_t p90 = std::min(candidates.size() - 1, candidates.size() * 9 / 10);
     std::nth_element(candidates.begin(), candidates.begin() + std::ptrdiff_t(p90),
                      candidates.end());
@@ -317,13 +322,15 @@ int main(int argc, char** argv) {
       std::printf(
           "%s{\"method\":\"%s\",\"steps\":%lld,\"refused_moves\":%lld,\"ns_per_step\":%s,"
           "\"queries_per_step\":%s,\"multi_query_steps\":%s,\"candidates_mean\":%s,"
-          "\"candidates_p90\":%s,\"brute_force_every\":%lld,\"brute_force_steps\":%lld,"
+          "\"candidates_p90\":%s,\"scanned_lanes_mean\":%s,\"brute_force_every\":%lld,\"brute_"
+          "force_steps\":%lld,"
           "\"overlapping_mean\":%s,\"ratio_mean\":%s,\"ratio_of_means\":%s,"
           "\"no_overlap_steps\":%lld}",
           k ? "," : "", r.method.c_str(), r.steps, r.refusedMoves, number(r.nsPerStep).c_str(),
           number(q.queriesPerStep).c_str(), number(q.multiQueryStepsFraction).c_str(),
-          number(q.candidatesMean).c_str(), number(q.candidatesP90).c_str(), q.bruteForceEvery,
-          q.bruteForceSteps, number(q.overlappingMean).c_str(), number(q.ratioMean).c_str(),
+          number(q.candidatesMean).c_str(), number(q.candidatesP90).c_str(),
+          number(q.scannedMean).c_str(), q.bruteForceEvery, q.bruteForceSteps,
+          number(q.overlappingMean).c_str(), number(q.ratioMean).c_str(),
           number(q.ratioOfMeans).c_str(), q.noOverlapSteps);
     }
     std::printf("]}\n");
@@ -332,19 +339,19 @@ int main(int argc, char** argv) {
   if (!noHeader) {
     std::printf(
         "| level | method | triangles | leaves | refs/tri | ns/step | queries/step | "
-        "candidates mean | candidates p90 | overlapping mean | ratio mean | ratio of means | "
-        "brute force every | refused |\n");
-    std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+        "candidates mean | candidates p90 | lanes scanned mean | overlapping mean | ratio mean | "
+        "ratio of means | brute force every | refused |\n");
+    std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   }
   for (const MethodResult& r : results) {
     const QueryFigures& q = r.queries;
     std::printf(
-        "| %s | %s | %zu | %u | %.2f | %.0f | %.2f | %.1f | %.0f | %.1f | %.2f | %.2f | %lld | "
-        "%lld |\n",
+        "| %s | %s | %zu | %u | %.2f | %.0f | %.2f | %.1f | %.0f | %.1f | %.1f | %.2f | %.2f | "
+        "%lld | %lld |\n",
         level.c_str(), r.method.c_str(), std::size_t(world.triangles().size()), tree.leaves,
         tree.referencesPerTriangle, r.nsPerStep, q.queriesPerStep, q.candidatesMean,
-        q.candidatesP90, q.overlappingMean, q.ratioMean, q.ratioOfMeans, q.bruteForceEvery,
-        r.refusedMoves);
+        q.candidatesP90, q.scannedMean, q.overlappingMean, q.ratioMean, q.ratioOfMeans,
+        q.bruteForceEvery, r.refusedMoves);
   }
   return 0;
 }

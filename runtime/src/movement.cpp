@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cassert>
 #include <cmath>
 #include <optional>
@@ -29,7 +30,17 @@ detail::StepWorkspace& StepScratch::workspace() {
 }
 
 std::size_t StepScratch::lastSlideCandidates() const {
-  return workspace_ ? workspace_->lastCount : 0;
+  if (!workspace_) return 0;
+  // Counted here, not in the slide: a short list is scanned whole, its
+  // lanes' boxes tested by the masks, and only the count needs them apart.
+  std::size_t count = 0;
+  for (const detail::CandidateBlock& block : workspace_->lastBlocks)
+    count += std::size_t(std::popcount(detail::boxMask(block, workspace_->lastLocal)));
+  return count;
+}
+
+std::size_t StepScratch::lastSlideScannedLanes() const {
+  return workspace_ ? workspace_->lastScanned : 0;
 }
 
 SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,

@@ -230,7 +230,7 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
     const Bounds swept = sweptBounds(start, result.end, radii);
     const Move move = makeMove(start, result.end, radii, walkableNormalY);
     const std::span<const detail::CandidateBlock> blocks =
-        local.around(world, swept, moveLength, radii, scratch);
+        local.around(world, swept, moveLength, radii, scratch, desiredEnd - start);
     // The triangles the body met last step (its ground, the wall it walks
     // into) are most often what blocks it again: tested alone, each is met
     // without the scan that would find it among the candidates (and that,

@@ -159,17 +159,18 @@ void collectBoxCandidates(const World& world, const Vec3& low, const Vec3& high,
 }
 
 void NearbyTriangles::cover(const World& world, const Vec3& low, const Vec3& high, float pad,
-                            SweepScratch& scratch) {
+                            SweepScratch& scratch, const Vec3& ahead) {
   // Reused while it holds the box, unless it is far larger than a query
   // for this box would be: one long move (a big push, a fast fall) must not
   // leave the body scanning a long list for many frames after.
   const Vec3 spare = (high_ - low_) - (high - low);
   if (worldId_ == world.id() && (low.array() >= low_.array()).all() &&
-      (high.array() <= high_.array()).all() && (spare.array() <= 4 * pad + 0.1f).all())
+      (high.array() <= high_.array()).all() &&
+      (spare.array() <= 4 * pad + 0.1f + ahead.array().abs()).all())
     return;
   worldId_ = world.id();
-  low_ = low - Vec3::Constant(pad);
-  high_ = high + Vec3::Constant(pad);
+  low_ = low - Vec3::Constant(pad) + ahead.cwiseMin(0.0f);
+  high_ = high + Vec3::Constant(pad) + ahead.cwiseMax(0.0f);
   ++queries_;
   static std::atomic<std::uint64_t> lastQueryId{0};
   queryId_ = ++lastQueryId;

@@ -248,7 +248,12 @@ struct StepWorkspace {
   /// The exact sweep's candidates whose edges an iteration may still test:
   /// (the earliest time their face stage allows, slot).
   std::vector<std::pair<double, std::uint32_t>> open;
-  std::size_t lastCount = 0;
+  /// The last slide's list (diagnostics: StepScratch::lastSlideCandidates):
+  /// its blocks, valid until the next slide, their lanes in use, and the
+  /// local box they were listed for.
+  std::span<const CandidateBlock> lastBlocks;
+  std::size_t lastScanned = 0;
+  Bounds lastLocal;
   /// Each body's cache, by index in the bodies stepBodies (or
   /// stepBodiesAgainstLevel) steps, so each body reuses its own query and
   /// candidates over frames.

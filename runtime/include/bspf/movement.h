@@ -481,8 +481,13 @@ class StepScratch {
   BodyGrid bodyGrid;
 
   /// How many triangles the last slide's narrow phase tested: the nearby
-  /// triangles whose box overlaps the slide's (diagnostics).
+  /// triangles whose box overlaps the slide's local box (its swept box,
+  /// grown a little). Diagnostics; valid until the scratch steps again.
   std::size_t lastSlideCandidates() const;
+  /// How many candidates the last slide's scans went through, their boxes
+  /// tested 4 at a time before anything else: a short list (at most 48)
+  /// whole, a longer one packed down to lastSlideCandidates(). Diagnostics.
+  std::size_t lastSlideScannedLanes() const;
   /// The narrow phases' working lists. Private to the runtime.
   detail::StepWorkspace& workspace();
 

@@ -93,10 +93,12 @@ class NearbyTriangles {
   /// [low, high] (metres). Queries the tree for [low, high] grown by `pad`
   /// metres on every side only when [low, high] is not inside the box last
   /// queried on this `world` (by World::id()), or when that box is more than
-  /// 4 * pad + 0.1 m larger along an axis (it would list too much). Preconditions: finite, low <=
-  /// high, pad >= 0.
+  /// 4 * pad + 0.1 m larger along an axis (it would list too much).
+  /// `ahead`, metres: a query also reaches this much further along each
+  /// axis on the side it points to (where a moving body goes next).
+  /// Preconditions: finite, low <= high, pad >= 0.
   void cover(const World& world, const Vec3& low, const Vec3& high, float pad,
-             SweepScratch& scratch);
+             SweepScratch& scratch, const Vec3& ahead = Vec3::Zero());
   /// Forgets the last query, so the next cover() queries again.
   void clear() { worldId_ = 0; }
   /// The triangles of the last query, in leaf order, with their boxes.
