@@ -144,11 +144,9 @@ class LocalCandidates {
   /// its block and lane, or nothing when it is not a candidate. The
   /// candidates are in triangle order, so a binary search finds it.
   std::optional<std::pair<const detail::CandidateBlock*, int>> laneOf(std::uint32_t t) const {
-    const auto it = std::lower_bound(
-        made_.cold.begin(), made_.cold.end(), t,
-        [](const Cold& cold, std::uint32_t triangle) { return cold.triangle < triangle; });
-    if (it == made_.cold.end() || it->triangle != t) return std::nullopt;
-    const std::size_t slot = std::size_t(it - made_.cold.begin());
+    const auto it = std::lower_bound(made_.triangles.begin(), made_.triangles.end(), t);
+    if (it == made_.triangles.end() || *it != t) return std::nullopt;
+    const std::size_t slot = std::size_t(it - made_.triangles.begin());
     return std::pair{&made_.blocks[slot / detail::kBlockLanes], int(slot % detail::kBlockLanes)};
   }
 
@@ -168,11 +166,13 @@ class LocalCandidates {
     std::sort(sorted_.begin(), sorted_.end());
     made_.blocks.resize((sorted_.size() + detail::kBlockLanes - 1) / detail::kBlockLanes);
     made_.cold.resize(sorted_.size());
+    made_.triangles.resize(sorted_.size());
     for (std::uint32_t slot = 0; slot < sorted_.size(); ++slot) {
       const CandidateTriangle& c = list[std::uint32_t(sorted_[slot])];
       detail::setLane(made_.blocks[slot / detail::kBlockLanes], int(slot % detail::kBlockLanes),
                       c.low, c.high, make_(c.triangle), slot);
       made_.cold[slot].reset(c.triangle);
+      made_.triangles[slot] = c.triangle;
     }
     detail::finishBlocks(made_.blocks, sorted_.size());
     made_.query = nearby.queryId();

@@ -219,6 +219,9 @@ template <typename Cold>
 struct MadeCandidates {
   std::vector<CandidateBlock> blocks;
   std::vector<Cold> cold;
+  /// cold[i].triangle, packed: searched for a triangle without touching
+  /// the larger cold entries.
+  std::vector<std::uint32_t> triangles;
   /// NearbyTriangles::queryId() of the query they were made from; 0: none.
   std::uint64_t query = 0;
   EllipsoidRadii radii{0, 0};  ///< they were made for
