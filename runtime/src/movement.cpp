@@ -10,6 +10,7 @@
 #include <bit>
 #include <cassert>
 #include <cmath>
+#include <cstring>
 #include <optional>
 #include <vector>
 
@@ -221,6 +222,26 @@ bool settingsInRange(const Body& body) {
          s.maxStepDown <= kMaxBodyRadius;
 }
 
+// settingsInRange, remembering per thread the last settings (and radii)
+// found in range: most bodies share them, and their bytes compare in a few
+// instructions where the ranges take a hundred. Settings equal byte for byte
+// to ones in range are in range, so nothing is ever accepted that the full
+// check would refuse.
+bool settingsInRangeRemembered(const Body& body) {
+  // No padding (its bytes are its fields): 4-byte fields only.
+  static_assert(sizeof(MovementSettings) == 11 * 4 && sizeof(CollisionMethod) == 4,
+                "MovementSettings changed: check it has no padding, then this count");
+  thread_local MovementSettings lastSettings;
+  thread_local EllipsoidRadii lastRadii{0, 0};
+  if (std::memcmp(&body.settings, &lastSettings, sizeof lastSettings) == 0 &&
+      body.radii.xz == lastRadii.xz && body.radii.y == lastRadii.y)
+    return true;
+  if (!settingsInRange(body)) return false;
+  lastSettings = body.settings;
+  lastRadii = body.radii;
+  return true;
+}
+
 }  // namespace
 
 const char* toString(InvalidInput invalid) {
@@ -258,7 +279,7 @@ InvalidInput checkStepInputs(const Body& body, const Vec3& force, float dt) {
   }
   for (const float r : {body.radii.xz, body.radii.y})
     if (!(r >= kMinBodyRadius && r <= kMaxBodyRadius)) return InvalidInput::Radii;
-  if (!settingsInRange(body)) return InvalidInput::Settings;
+  if (!settingsInRangeRemembered(body)) return InvalidInput::Settings;
   const float speed =
       body.velocity.cwiseAbs().sum() + (force.cwiseAbs().sum() + body.settings.gravity) * dt;
   const float reach = body.position.cwiseAbs().maxCoeff() + speed * dt;

@@ -119,6 +119,35 @@ TEST_CASE(
     }
 }
 
+TEST_CASE(
+    "settings that passed the check are checked again when they change, and against each "
+    "body's own radii",
+    "[movement][hostile]") {
+  StepScratch scratch;
+  StepReport report;
+  for (const CollisionMethod method : {CollisionMethod::Planes, CollisionMethod::ExactSweep}) {
+    INFO("method " << int(method));
+    // A step height of 1 m is in range for a body 0.85 m tall (at most
+    // twice its y radius), out of range for one 0.4 m tall.
+    Body tall = standing(0, method);
+    tall.settings.maxStepHeight = 1.0f;
+    stepBody(level().world, tall, Vec3(10, 0, 0), kDt, scratch, &report);
+    CHECK(report.invalidInput == InvalidInput::None);
+    Body short_ = standing(0, method);
+    short_.settings = tall.settings;
+    short_.radii.y = 0.4f;
+    short_.position.y() = 0.41f;
+    stepBody(level().world, short_, Vec3(10, 0, 0), kDt, scratch, &report);
+    CHECK(report.invalidInput == InvalidInput::Settings);
+    // The same body, its settings spoiled after a step that passed.
+    stepBody(level().world, tall, Vec3(10, 0, 0), kDt, scratch, &report);
+    CHECK(report.invalidInput == InvalidInput::None);
+    tall.settings.skin = -0.001f;
+    stepBody(level().world, tall, Vec3(10, 0, 0), kDt, scratch, &report);
+    CHECK(report.invalidInput == InvalidInput::Settings);
+  }
+}
+
 TEST_CASE("valid bodies report no invalid input", "[movement][hostile]") {
   StepScratch scratch;
   Body body = standing(0, CollisionMethod::Planes);
