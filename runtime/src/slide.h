@@ -143,10 +143,15 @@ class LocalCandidates {
   /// Where triangle `t` is among the candidates (made by the last around()):
   /// its block and lane, or nothing when it is not a candidate. The
   /// candidates are in triangle order, so a binary search finds it.
-  std::optional<std::pair<const detail::CandidateBlock*, int>> laneOf(std::uint32_t t) const {
-    const auto it = std::lower_bound(made_.triangles.begin(), made_.triangles.end(), t);
-    if (it == made_.triangles.end() || *it != t) return std::nullopt;
-    const std::size_t slot = std::size_t(it - made_.triangles.begin());
+  std::optional<std::pair<const detail::CandidateBlock*, int>> laneOf(std::uint32_t t) {
+    auto& [triangle, slot] = made_.lookups[t % made_.lookups.size()];
+    if (triangle != t) {
+      const auto it = std::lower_bound(made_.triangles.begin(), made_.triangles.end(), t);
+      triangle = t;
+      slot = it != made_.triangles.end() && *it == t ? std::uint32_t(it - made_.triangles.begin())
+                                                     : detail::MadeCandidates<Cold>::kNotListed;
+    }
+    if (slot == detail::MadeCandidates<Cold>::kNotListed) return std::nullopt;
     return std::pair{&made_.blocks[slot / detail::kBlockLanes], int(slot % detail::kBlockLanes)};
   }
 
@@ -167,6 +172,7 @@ class LocalCandidates {
     made_.blocks.resize((sorted_.size() + detail::kBlockLanes - 1) / detail::kBlockLanes);
     made_.cold.resize(sorted_.size());
     made_.triangles.resize(sorted_.size());
+    made_.lookups.fill({kNoTriangle, detail::MadeCandidates<Cold>::kNotListed});
     for (std::uint32_t slot = 0; slot < sorted_.size(); ++slot) {
       const CandidateTriangle& c = list[std::uint32_t(sorted_[slot])];
       detail::setLane(made_.blocks[slot / detail::kBlockLanes], int(slot % detail::kBlockLanes),

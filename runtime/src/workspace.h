@@ -222,6 +222,14 @@ struct MadeCandidates {
   /// cold[i].triangle, packed: searched for a triangle without touching
   /// the larger cold entries.
   std::vector<std::uint32_t> triangles;
+  /// The slots found for the last triangles looked up (LocalCandidates::
+  /// laneOf), by triangle % 4: a body asks for the same few (its touched
+  /// triangles) every step. kNotListed: not a candidate. Cleared when made.
+  static constexpr std::uint32_t kNotListed = ~std::uint32_t(0);
+  std::array<std::pair<std::uint32_t, std::uint32_t>, 4> lookups{{{kNotListed, kNotListed},
+                                                                  {kNotListed, kNotListed},
+                                                                  {kNotListed, kNotListed},
+                                                                  {kNotListed, kNotListed}}};
   /// NearbyTriangles::queryId() of the query they were made from; 0: none.
   std::uint64_t query = 0;
   EllipsoidRadii radii{0, 0};  ///< they were made for
