@@ -106,16 +106,24 @@ struct alignas(32) CandidateBlock {
   Vec3 low, high;
 };
 
-/// Sets `block`'s box from its used lanes (those with low <= high). Call
-/// once its lanes are written.
+/// Sets `block`'s box from its used lanes. Call once its lanes are written;
+/// precondition: each lane is either set (setLane, copyLane) or cleared
+/// (clearLanes), whose empty box (+infinity low, -infinity high) changes no
+/// minimum or maximum, so every lane is taken without a test (the loops
+/// vectorise; at 40 m/s this ran once per 8 candidates of every query).
 inline void sealBlock(CandidateBlock& block) {
-  block.low = Vec3::Constant(std::numeric_limits<float>::infinity());
-  block.high = -block.low;
-  for (int lane = 0; lane < kBlockLanes; ++lane) {
-    if (!(block.lowX[lane] <= block.highX[lane])) continue;
-    block.low = block.low.cwiseMin(Vec3(block.lowX[lane], block.lowY[lane], block.lowZ[lane]));
-    block.high = block.high.cwiseMax(Vec3(block.highX[lane], block.highY[lane], block.highZ[lane]));
-  }
+  auto least = [](const float(&lanes)[kBlockLanes]) {
+    float m = lanes[0];
+    for (int lane = 1; lane < kBlockLanes; ++lane) m = std::min(m, lanes[lane]);
+    return m;
+  };
+  auto most = [](const float(&lanes)[kBlockLanes]) {
+    float m = lanes[0];
+    for (int lane = 1; lane < kBlockLanes; ++lane) m = std::max(m, lanes[lane]);
+    return m;
+  };
+  block.low = Vec3(least(block.lowX), least(block.lowY), least(block.lowZ));
+  block.high = Vec3(most(block.highX), most(block.highY), most(block.highZ));
 }
 
 /// Writes candidate `slot` (its box and face test) into lane `lane`.
