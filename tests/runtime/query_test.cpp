@@ -329,6 +329,10 @@ TEST_CASE(
     "the nearby triangles hold every triangle near each box asked for, whichever side of the last "
     "query it leaves by, and query again only when it leaves",
     "[runtime][query]") {
+  // With `ahead`, each query also reaches three of the walk's last steps
+  // further along it.
+  const bool ahead = GENERATE(false, true);
+  INFO((ahead ? "stretched ahead" : "not stretched"));
   const bspf::test::AlignedBytes bytes(deepSoupBlob());
   const bspf::World world = *bspf::viewWorld(bytes.span()).world;
   bspf::SweepScratch scratch;
@@ -344,24 +348,33 @@ TEST_CASE(
   int reused = 0;
   for (int frame = 0; frame < 2000; ++frame) {
     // A random walk, with steps of every direction, small and large.
+    const Vec3 before = centre;
     centre += 0.15f * Vec3(gauss(rng), gauss(rng), gauss(rng));
     centre = centre.cwiseMax(Vec3::Constant(-11)).cwiseMin(Vec3::Constant(11));
+    const Vec3 stretch = ahead ? Vec3(3 * (centre - before)) : Vec3::Zero();
     const Vec3 low = centre - half, high = centre + half;
+    const Vec3 spare = (queriedHigh - queriedLow) - (high - low);
     const bool inside = frame > 0 && (low.array() >= queriedLow.array()).all() &&
-                        (high.array() <= queriedHigh.array()).all();
+                        (high.array() <= queriedHigh.array()).all() &&
+                        (spare.array() <= 4 * pad + 0.1f + stretch.array().abs()).all();
     if (!inside) {
       ++expectedQueries;
-      queriedLow = low - Vec3::Constant(pad);
-      queriedHigh = high + Vec3::Constant(pad);
+      queriedLow = low - Vec3::Constant(pad) + stretch.cwiseMin(0.0f);
+      queriedHigh = high + Vec3::Constant(pad) + stretch.cwiseMax(0.0f);
     } else {
       ++reused;
     }
-    nearby.cover(world, low, high, pad, scratch);
+    nearby.cover(world, low, high, pad, scratch, stretch);
     REQUIRE(nearby.queries() == expectedQueries);
     std::fill(isListed.begin(), isListed.end(), 0);
     for (const bspf::CandidateTriangle& c : nearby.list()) isListed[c.triangle] = 1;
     for (std::uint32_t t = 0; t < world.triangles().size(); ++t) {
-      if (!overlaps(triangleBox(world, t), low, high, 0)) continue;
+      // Every triangle near the box asked for, and, just after a query,
+      // every triangle near the box it was made for.
+      const bool nearAsked = overlaps(triangleBox(world, t), low, high, 0);
+      const bool nearQueried =
+          !inside && overlaps(triangleBox(world, t), queriedLow, queriedHigh, 0);
+      if (!nearAsked && !nearQueried) continue;
       INFO("frame " << frame << ", triangle " << t);
       REQUIRE(isListed[t]);
     }
