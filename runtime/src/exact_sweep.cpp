@@ -265,7 +265,7 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     open.clear();
     const detail::SpherePath path(p, move);
     for (const detail::CandidateBlock& block :
-         local.around(world, swept, moveLength, radii, scratch)) {
+         local.around(world, swept, moveLength, radii, scratch, desiredEnd - start)) {
       for (std::uint32_t bits = detail::exactMask(block, swept, from, to); bits != 0;
            bits &= bits - 1) {
         const std::uint32_t slot = block.slot[std::countr_zero(bits)];
