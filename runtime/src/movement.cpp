@@ -132,20 +132,17 @@ void snapToGround(const World& world, const Body& body, const Vec3& move, float 
   }
 }
 
-// Body::touchedTriangles after `slide`: its contacts' triangles, each once,
-// walkable ones first (the ground, met first by a walking body's next step).
-void rememberTouched(const SlideResult& slide, Body& body) {
-  std::fill(body.touchedTriangles.begin(), body.touchedTriangles.end(), kNoTriangle);
+// Body::groundTriangles after `slide`: its walkable contacts' triangles,
+// each once, in the order met.
+void rememberGround(const SlideResult& slide, Body& body) {
+  std::fill(body.groundTriangles.begin(), body.groundTriangles.end(), kNoTriangle);
   std::size_t count = 0;
-  for (const bool walkable : {true, false}) {
-    for (int i = 0; i < slide.contactCount && count < body.touchedTriangles.size(); ++i) {
-      const std::uint32_t t = slide.contacts[i].triangle;
-      if (slide.contacts[i].walkable != walkable ||
-          std::find(body.touchedTriangles.begin(), body.touchedTriangles.begin() + count, t) !=
-              body.touchedTriangles.begin() + count)
-        continue;
-      body.touchedTriangles[count++] = t;
-    }
+  for (int i = 0; i < slide.contactCount && count < body.groundTriangles.size(); ++i) {
+    const std::uint32_t t = slide.contacts[i].triangle;
+    if (slide.contacts[i].walkable &&
+        std::find(body.groundTriangles.begin(), body.groundTriangles.begin() + count, t) ==
+            body.groundTriangles.begin() + count)
+      body.groundTriangles[count++] = t;
   }
 }
 
@@ -306,7 +303,7 @@ InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt
   const Vec3 start = body.position;
   const float walkableY = walkableNormalY(body.settings);
   SlideResult slide = slideAgainstLevel(world, start, start + body.velocity * dt, body.radii,
-                                        body.settings, walkableY, scratch, body.touchedTriangles);
+                                        body.settings, walkableY, scratch, body.groundTriangles);
   // A rounded body resting on a step's edge (not walkable ground, but
   // support) may step on as well.
   auto onEdge = [&slide] {
@@ -325,7 +322,7 @@ InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt
   body.position = slide.end;
   detail::respondToContacts(body, slide, dt);
   body.grounded = anyWalkable(slide);
-  rememberTouched(slide, body);
+  rememberGround(slide, body);
   if (report) {
     recordSlide(world, report, slide, true);
     report->grounded = body.grounded;

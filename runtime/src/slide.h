@@ -50,7 +50,7 @@ struct SlideResult {
 
 /// The article's method (CollisionMethod::Planes), defects fixed.
 /// `hints`: triangles to test before scanning the candidates, each met
-/// first if it blocks (the body's Body::touchedTriangles; kNoTriangle
+/// first if it blocks (the body's Body::groundTriangles; kNoTriangle
 /// entries are skipped). At most 32.
 SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& desiredEnd,
                             EllipsoidRadii radii, const MovementSettings& settings,
@@ -68,7 +68,7 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
 /// query nothing. Larger pads query less often but list more triangles for
 /// every scan. Measured on walkers (callgrind, instructions per step, oa_dm1,
 /// oa_dm5, oacmpctf3, both methods) once a grounded body's scans stopped
-/// listing its floor (Body::touchedTriangles): against move + 0.15 m, this is
+/// listing its floor (Body::groundTriangles): against move + 0.15 m, this is
 /// 2 to 5% cheaper at 6 m/s and within 2% at 40 m/s; move + 0.25 and
 /// move + 0.35 were as cheap at 6 m/s but 3 and 6% dearer at 40.
 inline float nearbyPad(float moveLength) { return 0.5f * moveLength + 0.3f; }

@@ -170,12 +170,12 @@ const char* toString(InvalidInput invalid);
 
 /// A moving ellipsoid. Position and velocity are the body's state; the step
 /// reads and writes them. `grounded` is the ground state after the last step.
-/// No triangle (an entry of Body::touchedTriangles).
+/// No triangle (an entry of Body::groundTriangles).
 inline constexpr std::uint32_t kNoTriangle = 0xFFFFFFFFu;
-/// How many triangles a Body remembers from its last step.
-inline constexpr int kTouchedTriangles = 4;
-/// Body::touchedTriangles of a body that met nothing.
-inline constexpr std::array<std::uint32_t, kTouchedTriangles> kNoTouchedTriangles = {
+/// How many ground triangles a Body remembers from its last step.
+inline constexpr int kGroundTriangles = 4;
+/// Body::groundTriangles of a body that stood on nothing.
+inline constexpr std::array<std::uint32_t, kGroundTriangles> kNoGroundTriangles = {
     kNoTriangle, kNoTriangle, kNoTriangle, kNoTriangle};
 
 struct Body {
@@ -191,17 +191,17 @@ struct Body {
   /// bodies (BodyGrid): a game that builds a BodyGrid from bodies it did not
   /// step should set it to `position` first, or their jump is swept.
   Vec3 lastStepStart = Vec3::Zero();
-  /// The triangles (indices into World::triangles()) the body's last step
-  /// met, walkable ones first, each once, the rest kNoTriangle. The step
-  /// sets them, and the planes method's next step tests them first (a
-  /// walking body meets again the ground it stands on and the wall it walks
-  /// into, found then without a scan of its candidates). Any values are
-  /// safe: one that is not a triangle in the body's way (stale, set by hand,
-  /// from another level) costs one test, and a move still ends only where
-  /// no triangle blocks it. They may change which surface a move meets
-  /// first, so a game that replays steps should keep them with the body's
-  /// state.
-  std::array<std::uint32_t, kTouchedTriangles> touchedTriangles = kNoTouchedTriangles;
+  /// The walkable triangles (indices into World::triangles()) the body's
+  /// last step against the level met, each once, the rest kNoTriangle: its
+  /// ground. The step sets them, and the planes method's next step tests
+  /// them first (a walking body meets the ground it stands on first, found
+  /// then without a scan of its candidates, whose pre-check would pass every
+  /// floor triangle under it). Any values are safe: one that is not a
+  /// triangle in the body's way (stale, set by hand, from another level)
+  /// costs one test, and a move still ends only where no triangle blocks
+  /// it. They may change which of two surfaces a move meets first, so a game
+  /// that replays steps should keep them with the body's state.
+  std::array<std::uint32_t, kGroundTriangles> groundTriangles = kNoGroundTriangles;
 };
 
 /// The most contacts a StepReport keeps.
