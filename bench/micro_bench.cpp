@@ -9,6 +9,9 @@
 //                       with the triangle scaled into sphere space first (as
 //                       slideExact does for every candidate);
 //   CandidateTriangles  collectCandidateTriangles for one frame's move;
+//   StoredBoxes64       64 leaf entries' stored boxes tested against a move's
+//                       box, with the SSE test the tree query uses and with
+//                       the plain one;
 //   StepBody            a whole stepBody, for each method.
 // The inputs are realistic and deterministic: the states of the `walkers`
 // crowd (samples/walkers_sim.h: 64 agents walking at 6 m/s, dt 1/60, radii
@@ -36,6 +39,7 @@
 #include <vector>
 
 #include "narrow_phase.h"
+#include "stored_box.h"
 #include "support/mesh_blob.h"
 #include "walkers_sim.h"
 #include "workspace.h"
@@ -264,6 +268,30 @@ void candidateTriangles(benchmark::State& state, const Level& level) {
   state.counters["candidates"] = benchmark::Counter(double(total) / double(state.iterations()));
 }
 
+// The tree query's test of leaf entries' stored boxes (stored_box.h): 64
+// consecutive entries, from a rotating place in the blob, against the box
+// of one frame's move; `vectorised` picks the SSE test or the plain one.
+void storedBoxes(benchmark::State& state, const Level& level, bool vectorised) {
+  const std::span<const bspf::schema::Box> boxes = level.world().leafTriangleBounds();
+  constexpr std::size_t kPerCall = 64;
+  std::size_t first = 0, overlapping = 0;
+  cycle(state, level.moves, [&](const Move& m) {
+    const bspf::Bounds swept = bspf::sweptBounds(m.from, m.to, kRadii);
+    const bspf::detail::StoredBoxTest test(swept.low, swept.high);
+    std::size_t count = 0;
+    for (std::size_t k = 0; k < kPerCall; ++k) {
+      const bspf::schema::Box& box = boxes[(first + k) % boxes.size()];
+      count += vectorised ? test.overlaps(box)
+                          : bspf::detail::storedBoxOverlapsScalar(box, swept.low, swept.high);
+    }
+    benchmark::DoNotOptimize(count);
+    overlapping += count;
+    first = (first + kPerCall) % boxes.size();
+  });
+  state.counters["overlapping"] =
+      benchmark::Counter(double(overlapping) / double(state.iterations()));
+}
+
 void stepBody(benchmark::State& state, const Level& level, CollisionMethod method) {
   bspf::StepScratch scratch;
   cycle(state, method == CollisionMethod::Planes ? level.planesStates : level.exactStates,
@@ -301,6 +329,10 @@ int main(int argc, char** argv) {
                                  std::cref(level));
     benchmark::RegisterBenchmark(("CandidateTriangles" + suffix).c_str(), candidateTriangles,
                                  std::cref(level));
+    benchmark::RegisterBenchmark(("StoredBoxes64/sse" + suffix).c_str(), storedBoxes,
+                                 std::cref(level), true);
+    benchmark::RegisterBenchmark(("StoredBoxes64/plain" + suffix).c_str(), storedBoxes,
+                                 std::cref(level), false);
     benchmark::RegisterBenchmark(("StepBody/planes" + suffix).c_str(), stepBody, std::cref(level),
                                  CollisionMethod::Planes);
     benchmark::RegisterBenchmark(("StepBody/exact" + suffix).c_str(), stepBody, std::cref(level),
