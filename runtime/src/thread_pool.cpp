@@ -3,6 +3,15 @@
 
 #include <algorithm>
 #include <cassert>
+#include <chrono>
+#include <thread>
+
+#if defined(__x86_64__) || defined(_M_X64) || defined(__i386__) || defined(_M_IX86)
+#include <emmintrin.h>
+#define BSPF_SPIN_PAUSE() _mm_pause()
+#else
+#define BSPF_SPIN_PAUSE() std::this_thread::yield()
+#endif
 
 namespace bspf {
 
@@ -21,31 +30,54 @@ ThreadPool::~ThreadPool() {
   for (std::thread& worker : workers_) worker.join();
 }
 
+namespace {
+
+// Spins until done() or for about kSpinMicroseconds, whichever is first;
+// returns done(). Long enough to span the gap between two phases of a frame
+// (the serial work between them, such as building the body grid), short
+// enough to cost little when the pool then sleeps until the next frame.
+template <typename Done>
+bool spinUntil(Done done) {
+  constexpr auto kSpinMicroseconds = std::chrono::microseconds(50);
+  const auto until = std::chrono::steady_clock::now() + kSpinMicroseconds;
+  for (int k = 1;; ++k) {
+    if (done()) return true;
+    BSPF_SPIN_PAUSE();
+    if (k % 64 == 0 && std::chrono::steady_clock::now() >= until) return done();
+  }
+}
+
+}  // namespace
+
 void ThreadPool::runRanges(int thread) {
-  std::unique_lock lock(mutex_);
   const RangeTask& task = *task_;
-  while (nextRange_ < count_) {
-    const std::size_t first = nextRange_;
-    const std::size_t last = std::min(count_, first + chunk_);
-    nextRange_ = last;
-    lock.unlock();
-    task(thread, first, last);
-    lock.lock();
+  for (;;) {
+    const std::size_t first = nextRange_.fetch_add(chunk_, std::memory_order_relaxed);
+    if (first >= count_) return;
+    task(thread, first, std::min(count_, first + chunk_));
   }
 }
 
 void ThreadPool::workerLoop(int thread) {
   unsigned long long seen = 0;
   for (;;) {
+    spinUntil([&] {
+      return stopping_.load(std::memory_order_relaxed) ||
+             generation_.load(std::memory_order_relaxed) != seen;
+    });
     {
+      // The job's fields were written under the mutex: taking it makes them
+      // visible, whether the spin or the condition variable saw the change.
       std::unique_lock lock(mutex_);
       wake_.wait(lock, [&] { return stopping_ || generation_ != seen; });
       if (stopping_) return;
       seen = generation_;
     }
     runRanges(thread);
-    std::lock_guard lock(mutex_);
-    if (--busy_ == 0) done_.notify_one();
+    if (busy_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
+      std::lock_guard lock(mutex_);
+      done_.notify_one();
+    }
   }
 }
 
@@ -70,8 +102,11 @@ void ThreadPool::parallelFor(std::size_t count, std::size_t chunk, const RangeTa
   runRanges(0);
   // Every worker leaves the job before the task goes out of scope, even one
   // that woke too late to find a range left.
-  std::unique_lock lock(mutex_);
-  done_.wait(lock, [&] { return busy_ == 0; });
+  if (!spinUntil([&] { return busy_.load(std::memory_order_acquire) == 0; })) {
+    std::unique_lock lock(mutex_);
+    done_.wait(lock, [&] { return busy_ == 0; });
+  }
+  std::lock_guard lock(mutex_);
   task_ = nullptr;
 }
 

@@ -3,6 +3,7 @@
 
 #include <atomic>
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <memory>
 #include <thread>
 #include <vector>
@@ -47,4 +48,21 @@ TEST_CASE("a thread pool runs ranges on several threads at once", "[runtime][thr
     --inside;
   });
   REQUIRE(mostInside == 2);
+}
+
+TEST_CASE("a thread pool covers every item when its workers have gone to sleep between calls",
+          "[runtime][threads]") {
+  // Workers spin a little after a job, then sleep: a pause longer than the
+  // spin between calls makes each call wake them from the sleep.
+  bspf::ThreadPool pool(3);
+  for (int call = 0; call < 20; ++call) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(call % 2 == 0 ? 2 : 0));
+    const std::size_t count = 64;
+    const auto visits = std::make_unique<std::atomic<int>[]>(count);
+    pool.parallelFor(count, 3, [&](int, std::size_t first, std::size_t last) {
+      for (std::size_t i = first; i < last; ++i) ++visits[i];
+    });
+    INFO("call " << call);
+    for (std::size_t i = 0; i < count; ++i) REQUIRE(visits[i] == 1);
+  }
 }

@@ -4,6 +4,7 @@
 // of their own can ignore it and drive the phases of movement.h themselves.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <cstddef>
 #include <functional>
@@ -50,14 +51,18 @@ class ThreadPool {
   std::vector<std::thread> workers_;
   std::mutex mutex_;
   std::condition_variable wake_, done_;
-  // The current job, guarded by mutex_ (generation_ tells workers a new one
-  // started); nextRange_ is handed out under the mutex as well: ranges are
-  // coarse, so the lock is cheap next to the work in each.
+  // The current job: task_, count_ and chunk_ are written under mutex_
+  // before generation_ changes, which tells workers a new one started.
+  // Workers and the caller spin a little on generation_ and busy_ before
+  // sleeping on the condition variables (a frame's phases follow each other
+  // within microseconds, and a sleeping thread takes tens of them to wake),
+  // and take ranges with an atomic counter.
   const RangeTask* task_ = nullptr;
-  std::size_t count_ = 0, chunk_ = 1, nextRange_ = 0;
-  unsigned long long generation_ = 0;
-  int busy_ = 0;  ///< workers still inside the current job
-  bool stopping_ = false;
+  std::size_t count_ = 0, chunk_ = 1;
+  std::atomic<std::size_t> nextRange_{0};
+  std::atomic<unsigned long long> generation_{0};
+  std::atomic<int> busy_{0};  ///< workers still inside the current job
+  std::atomic<bool> stopping_{false};
 };
 
 }  // namespace bspf
