@@ -20,16 +20,11 @@ std::uint32_t scalarMask(const CandidateBlock& block, const Bounds& box, const V
   // (No early exit on the block's box: the reference checks every lane.)
   std::uint32_t bits = 0;
   for (int i = 0; i < kBlockLanes; ++i) {
-    bool keep = block.lowX[i] <= box.high.x() && box.low.x() <= block.highX[i] &&
-                block.lowY[i] <= box.high.y() && box.low.y() <= block.highY[i] &&
-                block.lowZ[i] <= box.high.z() && box.low.z() <= block.highZ[i];
+    bool keep = laneBoxOverlaps(block, i, box);
     if constexpr (check != Check::Box) {
       // The side values: signed distances of the start and end centres to
       // the face plane, metres.
-      const float startSide = block.normalX[i] * start.x() + block.normalY[i] * start.y() +
-                              block.normalZ[i] * start.z() - block.distance[i];
-      const float endSide = block.normalX[i] * end.x() + block.normalY[i] * end.y() +
-                            block.normalZ[i] * end.z() - block.distance[i];
+      const float startSide = laneSide(block, i, start), endSide = laneSide(block, i, end);
       if constexpr (check == Check::Planes) {
         keep = keep && endSide < block.reach[i] && startSide >= 0;
         sides->start[i] = startSide, sides->end[i] = endSide;

@@ -113,15 +113,11 @@ void offerTriangle(const World& world, std::uint32_t t, const Move& move, const 
   if (!lane) return;
   const detail::CandidateBlock& block = *lane->first;
   const int i = lane->second;
-  const bool overlaps = block.lowX[i] <= swept.high.x() && swept.low.x() <= block.highX[i] &&
-                        block.lowY[i] <= swept.high.y() && swept.low.y() <= block.highY[i] &&
-                        block.lowZ[i] <= swept.high.z() && swept.low.z() <= block.highZ[i];
-  auto side = [&](const Vec3& p) {
-    return block.normalX[i] * p.x() + block.normalY[i] * p.y() + block.normalZ[i] * p.z() -
-           block.distance[i];
-  };
-  const float startSide = side(move.start), endSide = side(move.end);
-  if (overlaps && endSide < block.reach[i] && startSide >= 0)
+  // planesMask's test, for this lane alone.
+  if (!detail::laneBoxOverlaps(block, i, swept)) return;
+  const float startSide = detail::laneSide(block, i, move.start),
+              endSide = detail::laneSide(block, i, move.end);
+  if (endSide < block.reach[i] && startSide >= 0)
     offerLane(world, block, i, startSide, endSide, move, local, best);
 }
 
@@ -218,8 +214,8 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
   int constraintCount = 0;
   // A crease solution may move the end at most this far: a frame's travel
   // plus the body's size.
-  const float maxShift = (desiredEnd - start).norm() + std::max(radii.xz, radii.y);
   const float moveLength = (desiredEnd - start).norm();
+  const float maxShift = moveLength + std::max(radii.xz, radii.y);
   detail::StepWorkspace& workspace = scratch.workspace();
   LocalCandidates local(
       detail::activePlanes(workspace), workspace.listed, workspace.sorted,

@@ -168,6 +168,20 @@ inline void finishBlocks(std::span<CandidateBlock> blocks, std::size_t count) {
   for (CandidateBlock& block : blocks) sealBlock(block);
 }
 
+/// Whether lane `lane`'s box overlaps `box` (touching counts): one lane of
+/// boxMask, in the reference's operations.
+inline bool laneBoxOverlaps(const CandidateBlock& block, int lane, const Bounds& box) {
+  return block.lowX[lane] <= box.high.x() && box.low.x() <= block.highX[lane] &&
+         block.lowY[lane] <= box.high.y() && box.low.y() <= block.highY[lane] &&
+         block.lowZ[lane] <= box.high.z() && box.low.z() <= block.highZ[lane];
+}
+
+/// Lane `lane`'s signed distance, metres, of point `p` to its face plane.
+inline float laneSide(const CandidateBlock& block, int lane, const Vec3& p) {
+  return block.normalX[lane] * p.x() + block.normalY[lane] * p.y() + block.normalZ[lane] * p.z() -
+         block.distance[lane];
+}
+
 /// Bit i set when lane i's box overlaps `box` (touching counts).
 std::uint32_t boxMask(const CandidateBlock& block, const Bounds& box);
 /// The side values planesMask computed: lane i's signed distances, metres,
