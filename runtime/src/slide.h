@@ -93,10 +93,10 @@ class LocalCandidates {
   /// hold more). `moveLength`, metres, sizes the local box and the tree
   /// query; `move` (the slide's whole move, metres) stretches the query
   /// ahead of the body, where its next frames go: up to 4 moves, at most
-  /// 0.8 m (callgrind on walkers, planes, oa_dm1, oa_dm5, oacmpctf3: 4 to 9%
-  /// fewer instructions per step at 6 m/s and 6% at 40 m/s than none; 8
-  /// moves or no cap were as good at 6 m/s and worse at 40, 0.5 m and
-  /// 1.2 m were 2% worse at 40).
+  /// 0.8 m (callgrind on walkers, planes, oa_dm1, oa_dm5, oacmpctf3: 5 to 8%
+  /// fewer instructions per step at 6 m/s and 2% at 40 m/s than none. Tuned
+  /// while walls were hints too: then 8 moves or no cap were as good at
+  /// 6 m/s and worse at 40, 0.5 m and 1.2 m 2% worse at 40).
   std::span<const detail::CandidateBlock> around(const World& world, const Bounds& swept,
                                                  float moveLength, EllipsoidRadii radii,
                                                  StepScratch& scratch,
