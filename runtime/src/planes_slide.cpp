@@ -85,11 +85,11 @@ void offerLane(const World& world, const detail::CandidateBlock& block, int lane
     best = Hit{t, facing, normal, block.distance[lane], reach};
 }
 
-// The triangle in the way of the move with the lowest facing value, if any
-// (else !found()).
-Hit findBlockingTriangle(const World& world, const Move& move, const Bounds& swept, auto& local,
-                         std::span<const detail::CandidateBlock> blocks) {
-  Hit best;
+// Offers every candidate of `blocks` in the way of the move to `best`,
+// which then holds the one with the lowest facing value, if any (else
+// !found()). Filled in place: the slide's one Hit, never copied back.
+void findBlockingTriangle(const World& world, const Move& move, const Bounds& swept, auto& local,
+                          std::span<const detail::CandidateBlock> blocks, Hit& best) {
   detail::LaneSides sides;
   for (const detail::CandidateBlock& block : blocks) {
     // The cheap tests for the whole block at once (the box, then the
@@ -102,7 +102,6 @@ Hit findBlockingTriangle(const World& world, const Move& move, const Bounds& swe
       offerLane(world, block, lane, sides.start[lane], sides.end[lane], move, local, best);
     }
   }
-  return best;
 }
 
 // Offers triangle `t` to `best` if it is a candidate and blocks the move:
@@ -221,7 +220,11 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
       detail::activePlanes(workspace), workspace.listed, workspace.sorted,
       [&](std::uint32_t triangle) { return detail::planesFaceTest(world, triangle, radii); });
   assert(hints.size() <= 32);
-  std::uint32_t hintsTested = 0;  // bit k: hints[k] was tested
+  // Bit k: hints[k] is a triangle not tested yet. Set once, so an
+  // iteration skips the spent and empty entries without reading them.
+  std::uint32_t hintsLeft = 0;
+  for (std::size_t k = 0; k < hints.size(); ++k)
+    hintsLeft |= std::uint32_t(hints[k] != kNoTriangle) << k;
   for (int iteration = 0;; ++iteration) {
     const Bounds swept = sweptBounds(start, result.end, radii);
     const Move move = makeMove(start, result.end, radii, walkableNormalY);
@@ -237,12 +240,9 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
     // that did not block, or was met, seldom blocks later in the slide
     // (each slide moves the end out of what it met).
     Hit hit;
-    for (std::size_t k = 0; k < hints.size() && !hit.found(); ++k) {
-      if (hints[k] == kNoTriangle || (hintsTested & (1u << k))) continue;
-      hintsTested |= 1u << k;
-      offerTriangle(world, hints[k], move, swept, local, hit);
-    }
-    if (!hit.found()) hit = findBlockingTriangle(world, move, swept, local, blocks);
+    for (; hintsLeft != 0 && !hit.found(); hintsLeft &= hintsLeft - 1)
+      offerTriangle(world, hints[std::countr_zero(hintsLeft)], move, swept, local, hit);
+    if (!hit.found()) findBlockingTriangle(world, move, swept, local, blocks, hit);
     if (!hit.found()) return result;
     if (iteration == settings.maxIterations) {
       // The six planes found no place for the end (a body held between
