@@ -216,39 +216,13 @@ double BodyGrid::meetTime(std::uint32_t a, std::uint32_t b, Vec3& normal) const 
   return begin + at;
 }
 
-void BodyGrid::sweep(std::span<const Body> bodies) {
-  stops_.clear();
-  const std::size_t n = bodies.size();
-  // Whether a body's move, over its radii, is longer than kSweepMinMove:
-  // (x / a)^2 + (y / b)^2 + (z / a)^2 > k^2, multiplied out (no division:
-  // this runs for every body every frame, and most frames have no fast body).
-  auto isFast = [](const Body& b) {
-    const Vec3 move = b.position - b.lastStepStart;
-    const float a2 = b.radii.xz * b.radii.xz, b2 = b.radii.y * b.radii.y;
-    return (move.x() * move.x() + move.z() * move.z()) * b2 + move.y() * move.y() * a2 >
-           kSweepMinMove * kSweepMinMove * a2 * b2;
-  };
-  if (std::none_of(bodies.begin(), bodies.end(), isFast)) return;
-  movers_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const Body& b = bodies[i];
-    Mover& m = movers_[i];
-    m.start = b.lastStepStart;
-    m.move = b.position - m.start;
-    m.radii = b.radii;
-    m.skin = b.settings.skin;
-    const Vec3 reach(b.radii.xz + m.skin, b.radii.y + m.skin, b.radii.xz + m.skin);
-    m.low = m.start.cwiseMin(b.position) - reach;
-    m.high = m.start.cwiseMax(b.position) + reach;
-    m.fast = isFast(b);
-  }
-
+void BodyGrid::sweepPairsByCells() {
+  const std::uint32_t n = std::uint32_t(movers_.size());
   // Each fast body's path, in pieces of at most a cell along each axis, is
   // filed under every cell a piece's box covers (at most 3 a piece along
   // each axis: the piece and a body's reach of half a cell on each side).
   sweepCells_.clear();
   oversize_.clear();
-  sweepPairs_.clear();
   Vec3 fastLow = Vec3::Constant(std::numeric_limits<float>::infinity()), fastHigh = -fastLow;
   const Vec3 inverse(inverseWidth_, inverseHeight_, inverseWidth_);
   for (std::uint32_t i = 0; i < n; ++i) {
@@ -315,6 +289,67 @@ void BodyGrid::sweep(std::span<const Body> bodies) {
   }
   for (const std::uint32_t x : oversize_)
     for (std::uint32_t y = 0; y < n; ++y) consider(x, y);
+}
+
+void BodyGrid::sweepPairsBySorting() {
+  // The boxes in order of their low x (a float's bits, sign-flipped, order
+  // as the float does), each against those after it that start before it
+  // ends along x: every pair whose boxes meet, with no cell filing or
+  // search (walkers at 40 m/s, 64 bodies: 495 instructions per body-step in
+  // the sweep through the cells, callgrind).
+  const std::uint32_t n = std::uint32_t(movers_.size());
+  sweepOrder_.resize(n);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t bits = std::bit_cast<std::uint32_t>(movers_[i].low.x());
+    const std::uint32_t ordered = bits >> 31 ? ~bits : bits | 0x80000000u;
+    sweepOrder_[i] = std::uint64_t(ordered) << 32 | i;
+  }
+  std::sort(sweepOrder_.begin(), sweepOrder_.end());
+  for (std::uint32_t k = 0; k < n; ++k) {
+    const std::uint32_t a = std::uint32_t(sweepOrder_[k]);
+    const Mover& p = movers_[a];
+    for (std::uint32_t l = k + 1; l < n; ++l) {
+      const std::uint32_t b = std::uint32_t(sweepOrder_[l]);
+      const Mover& q = movers_[b];
+      if (q.low.x() > p.high.x()) break;
+      if ((p.fast || q.fast) && boxesMeet(p.low, p.high, q.low, q.high))
+        sweepPairs_.push_back(std::uint64_t(std::min(a, b)) << 32 | std::max(a, b));
+    }
+  }
+}
+
+void BodyGrid::sweep(std::span<const Body> bodies) {
+  stops_.clear();
+  const std::size_t n = bodies.size();
+  // Whether a body's move, over its radii, is longer than kSweepMinMove:
+  // (x / a)^2 + (y / b)^2 + (z / a)^2 > k^2, multiplied out (no division:
+  // this runs for every body every frame, and most frames have no fast body).
+  auto isFast = [](const Body& b) {
+    const Vec3 move = b.position - b.lastStepStart;
+    const float a2 = b.radii.xz * b.radii.xz, b2 = b.radii.y * b.radii.y;
+    return (move.x() * move.x() + move.z() * move.z()) * b2 + move.y() * move.y() * a2 >
+           kSweepMinMove * kSweepMinMove * a2 * b2;
+  };
+  if (std::none_of(bodies.begin(), bodies.end(), isFast)) return;
+  movers_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Body& b = bodies[i];
+    Mover& m = movers_[i];
+    m.start = b.lastStepStart;
+    m.move = b.position - m.start;
+    m.radii = b.radii;
+    m.skin = b.settings.skin;
+    const Vec3 reach(b.radii.xz + m.skin, b.radii.y + m.skin, b.radii.xz + m.skin);
+    m.low = m.start.cwiseMin(b.position) - reach;
+    m.high = m.start.cwiseMax(b.position) + reach;
+    m.fast = isFast(b);
+  }
+
+  sweepPairs_.clear();
+  if (n <= kSortedSweepBodies)
+    sweepPairsBySorting();
+  else
+    sweepPairsByCells();
   std::sort(sweepPairs_.begin(), sweepPairs_.end());
   sweepPairs_.erase(std::unique(sweepPairs_.begin(), sweepPairs_.end()), sweepPairs_.end());
 

@@ -316,6 +316,14 @@ inline constexpr int kMaxSweepPieces = 256;
 /// them pass through each other (the push still parts them).
 inline constexpr int kMaxSweepCellBodies = 64;
 
+/// Crowds of at most this many bodies find the sweep's pairs by sorting
+/// their swept boxes along x rather than through grid cells: every pair
+/// whose boxes meet, which for so few bodies is cheaper than filing paths
+/// under cells, and as no cell can then hold more than kMaxSweepCellBodies
+/// bodies, finds every pair the cells would (so the stop times are the same
+/// for bodies of one shape).
+inline constexpr int kSortedSweepBodies = kMaxSweepCellBodies;
+
 /// The body-against-body phase for bodies [first, last) of `bodies`: first,
 /// a body whose move the grid's sweep cut short (BodyGrid::build) is set
 /// back along its move to where it met another body, as a move against the
@@ -431,6 +439,11 @@ class BodyGrid {
   };
   /// Sets stops_ (empty when no body is fast).
   void sweep(std::span<const Body> bodies);
+  /// Fill sweepPairs_ (unsorted, maybe repeated) from movers_: through the
+  /// grid cells fast paths cross, or, for kSortedSweepBodies bodies or
+  /// fewer, by sorting the movers' boxes along x.
+  void sweepPairsByCells();
+  void sweepPairsBySorting();
   /// The time (0 to 1) at which bodies a < b of movers_ first meet, moving
   /// until their current stop times, or above 1 if they never do; sets
   /// `normal` (from b towards a) when they do.
@@ -459,7 +472,8 @@ class BodyGrid {
   std::vector<Mover> movers_;
   std::vector<std::pair<std::uint64_t, std::uint32_t>> sweepCells_;  ///< (cell key, fast body)
   std::vector<std::uint64_t> sweepPairs_;                            ///< a << 32 | b, a < b
-  std::vector<std::uint32_t> oversize_;  ///< fast bodies of more than kMaxSweepPieces pieces
+  std::vector<std::uint64_t> sweepOrder_;  ///< low x's ordered bits << 32 | body, sorted
+  std::vector<std::uint32_t> oversize_;    ///< fast bodies of more than kMaxSweepPieces pieces
 };
 
 /// Per-thread scratch for the step. Reusable across worlds and frames; it
