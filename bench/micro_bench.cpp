@@ -12,6 +12,9 @@
 //   StoredBoxes64       64 leaf entries' stored boxes tested against a move's
 //                       box, with the SSE test the tree query uses and with
 //                       the plain one;
+//   PlanesMask          the planes method's box test and pre-check of one
+//                       block of 8 candidates (workspace.h), on each path the
+//                       CPU runs: one lane at a time, SSE, AVX;
 //   StepBody            a whole stepBody, for each method.
 // The inputs are realistic and deterministic: the states of the `walkers`
 // crowd (samples/walkers_sim.h: 64 agents walking at 6 m/s, dt 1/60, radii
@@ -292,6 +295,37 @@ void storedBoxes(benchmark::State& state, const Level& level, bool vectorised) {
       benchmark::Counter(double(overlapping) / double(state.iterations()));
 }
 
+// planesMask on `path`: blocks of 8 consecutive pre-check inputs' face
+// planes (boxes around everything, so the side values decide), each tested
+// for the move of its first input.
+void planesMask(benchmark::State& state, const Level& level, bspf::detail::MaskPath path) {
+  struct BlockInput {
+    bspf::detail::CandidateBlock block;
+    Vec3 start, end;
+  };
+  std::vector<BlockInput> blocks;
+  for (std::size_t first = 0; first + 8 <= level.preChecks.size(); first += 8) {
+    BlockInput& in = blocks.emplace_back();
+    for (int lane = 0; lane < 8; ++lane) {
+      const bspf::schema::Plane& face = *level.preChecks[first + lane].face;
+      const Vec3 normal = bspf::toVec3(face.normal());
+      bspf::detail::setLane(in.block, lane, Vec3::Constant(-1e6f), Vec3::Constant(1e6f),
+                            {normal, face.distance(), bspf::effectiveRadius(normal, kRadii)},
+                            std::uint32_t(lane));
+    }
+    bspf::detail::sealBlock(in.block);
+    in.start = level.preChecks[first].start;
+    in.end = level.preChecks[first].end;
+  }
+  cycle(state, blocks, [path](const BlockInput& x) {
+    bspf::detail::LaneSides sides;
+    const bspf::Bounds box{x.start.cwiseMin(x.end), x.start.cwiseMax(x.end)};
+    std::uint32_t bits = bspf::detail::planesMaskOn(path, x.block, box, x.start, x.end, sides);
+    benchmark::DoNotOptimize(bits);
+    benchmark::DoNotOptimize(sides);
+  });
+}
+
 void stepBody(benchmark::State& state, const Level& level, CollisionMethod method) {
   bspf::StepScratch scratch;
   cycle(state, method == CollisionMethod::Planes ? level.planesStates : level.exactStates,
@@ -333,6 +367,13 @@ int main(int argc, char** argv) {
                                  std::cref(level), true);
     benchmark::RegisterBenchmark(("StoredBoxes64/plain" + suffix).c_str(), storedBoxes,
                                  std::cref(level), false);
+    for (const bspf::detail::MaskPath path : bspf::detail::availableMaskPaths()) {
+      const char* name = path == bspf::detail::MaskPath::Avx   ? "avx"
+                         : path == bspf::detail::MaskPath::Sse ? "sse"
+                                                               : "scalar";
+      benchmark::RegisterBenchmark(("PlanesMask/" + std::string(name) + suffix).c_str(), planesMask,
+                                   std::cref(level), path);
+    }
     benchmark::RegisterBenchmark(("StepBody/planes" + suffix).c_str(), stepBody, std::cref(level),
                                  CollisionMethod::Planes);
     benchmark::RegisterBenchmark(("StepBody/exact" + suffix).c_str(), stepBody, std::cref(level),

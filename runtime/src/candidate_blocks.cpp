@@ -1,11 +1,20 @@
 // SPDX-License-Identifier: MIT
 // The box test and the pre-checks of the narrow phases, a CandidateBlock at a
 // time (workspace.h): on x86-64, 4 lanes per SSE instruction (SSE2 is part of
-// the baseline every x86-64 CPU has, so no run-time dispatch is needed);
-// elsewhere, or with BSPF_SCALAR_MASKS defined, a plain loop that computes
-// the same bits with the same float operations in the same order. The tests
-// run both and compare them (tests/runtime/candidate_blocks_test.cpp).
+// the baseline every x86-64 CPU has), or all 8 per AVX instruction where the
+// CPU has AVX (chosen once, at run time: the build stays for the baseline
+// CPU); elsewhere, or with BSPF_SCALAR_MASKS defined, a plain loop. Every
+// path computes the same bits with the same float operations in the same
+// order (AVX without FMA: no product is fused into a sum), and the tests run
+// each path the CPU has against the plain loop
+// (tests/runtime/candidate_blocks_test.cpp).
 #include "workspace.h"  // defines BSPF_SSE_MASKS where SSE2 is used
+
+#if defined(BSPF_SSE_MASKS) && (defined(__GNUC__) || defined(__clang__)) && \
+    !defined(BSPF_NO_AVX_MASKS)
+#include <immintrin.h>
+#define BSPF_AVX_MASKS 1
+#endif
 
 namespace bspf::detail {
 
@@ -85,9 +94,91 @@ std::uint32_t sseMask(const CandidateBlock& block, const Bounds& box, const Vec3
 }
 #endif
 
+#ifdef BSPF_AVX_MASKS
+// sseMask, 8 lanes at a time. Compiled for AVX alone (not FMA, so products
+// and sums round as in the other paths); called only where the CPU has it.
+template <Check check>
+__attribute__((target("avx"))) std::uint32_t avxMask(const CandidateBlock& block, const Bounds& box,
+                                                     const Vec3& start, const Vec3& end,
+                                                     LaneSides* sides) {
+  if (!boxesOverlap(block.low, block.high, box.low, box.high)) return 0;
+  static_assert(kBlockLanes == 8 && alignof(CandidateBlock) >= 32 && alignof(LaneSides) >= 32);
+  // (No lambdas: they would not be compiled for AVX.)
+  __m256 keep = _mm256_and_ps(
+      _mm256_cmp_ps(_mm256_load_ps(block.lowX), _mm256_set1_ps(box.high.x()), _CMP_LE_OQ),
+      _mm256_cmp_ps(_mm256_set1_ps(box.low.x()), _mm256_load_ps(block.highX), _CMP_LE_OQ));
+  keep = _mm256_and_ps(
+      keep,
+      _mm256_and_ps(
+          _mm256_cmp_ps(_mm256_load_ps(block.lowY), _mm256_set1_ps(box.high.y()), _CMP_LE_OQ),
+          _mm256_cmp_ps(_mm256_set1_ps(box.low.y()), _mm256_load_ps(block.highY), _CMP_LE_OQ)));
+  keep = _mm256_and_ps(
+      keep,
+      _mm256_and_ps(
+          _mm256_cmp_ps(_mm256_load_ps(block.lowZ), _mm256_set1_ps(box.high.z()), _CMP_LE_OQ),
+          _mm256_cmp_ps(_mm256_set1_ps(box.low.z()), _mm256_load_ps(block.highZ), _CMP_LE_OQ)));
+  if constexpr (check != Check::Box) {
+    const __m256 nx = _mm256_load_ps(block.normalX), ny = _mm256_load_ps(block.normalY),
+                 nz = _mm256_load_ps(block.normalZ);
+    const __m256 distance = _mm256_load_ps(block.distance), reach = _mm256_load_ps(block.reach);
+    const __m256 startSide =
+        _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, _mm256_set1_ps(start.x())),
+                                                  _mm256_mul_ps(ny, _mm256_set1_ps(start.y()))),
+                                    _mm256_mul_ps(nz, _mm256_set1_ps(start.z()))),
+                      distance);
+    const __m256 endSide =
+        _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, _mm256_set1_ps(end.x())),
+                                                  _mm256_mul_ps(ny, _mm256_set1_ps(end.y()))),
+                                    _mm256_mul_ps(nz, _mm256_set1_ps(end.z()))),
+                      distance);
+    if constexpr (check == Check::Planes) {
+      keep = _mm256_and_ps(
+          keep, _mm256_and_ps(_mm256_cmp_ps(endSide, reach, _CMP_LT_OQ),
+                              _mm256_cmp_ps(startSide, _mm256_setzero_ps(), _CMP_GE_OQ)));
+      _mm256_store_ps(sides->start, startSide);
+      _mm256_store_ps(sides->end, endSide);
+    } else {
+      const __m256 inReach = _mm256_or_ps(_mm256_cmp_ps(startSide, reach, _CMP_LE_OQ),
+                                          _mm256_cmp_ps(endSide, reach, _CMP_LE_OQ));
+      keep = _mm256_and_ps(
+          keep,
+          _mm256_and_ps(_mm256_cmp_ps(startSide, _mm256_set1_ps(-1e-5f), _CMP_GE_OQ), inReach));
+    }
+  }
+  return std::uint32_t(_mm256_movemask_ps(keep));
+}
+
+// Whether this CPU (and its operating system, which must save the wider
+// registers) runs AVX: asked once.
+bool cpuHasAvx() {
+  static const bool has = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx") != 0;
+  }();
+  return has;
+}
+#endif
+
+template <Check check>
+std::uint32_t maskOn(MaskPath path, const CandidateBlock& block, const Bounds& box,
+                     const Vec3& start, const Vec3& end, LaneSides* sides) {
+  switch (path) {
+#ifdef BSPF_AVX_MASKS
+    case MaskPath::Avx: return avxMask<check>(block, box, start, end, sides);
+#endif
+#ifdef BSPF_SSE_MASKS
+    case MaskPath::Sse: return sseMask<check>(block, box, start, end, sides);
+#endif
+    default: return scalarMask<check>(block, box, start, end, sides);
+  }
+}
+
 template <Check check>
 std::uint32_t mask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
                    const Vec3& end, LaneSides* sides = nullptr) {
+#ifdef BSPF_AVX_MASKS
+  if (cpuHasAvx()) return avxMask<check>(block, box, start, end, sides);
+#endif
 #ifdef BSPF_SSE_MASKS
   return sseMask<check>(block, box, start, end, sides);
 #else
@@ -109,6 +200,64 @@ std::uint32_t planesMask(const CandidateBlock& block, const Bounds& box, const V
 std::uint32_t exactMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
                         const Vec3& end) {
   return mask<Check::Exact>(block, box, start, end);
+}
+
+namespace {
+
+// The widest paths with the masks' own signatures, so a scan calls the
+// chosen one directly, without planesMask's test of the CPU on every block.
+#ifdef BSPF_AVX_MASKS
+__attribute__((target("avx"))) std::uint32_t avxPlanesMask(const CandidateBlock& block,
+                                                           const Bounds& box, const Vec3& start,
+                                                           const Vec3& end, LaneSides& sides) {
+  return avxMask<Check::Planes>(block, box, start, end, &sides);
+}
+__attribute__((target("avx"))) std::uint32_t avxExactMask(const CandidateBlock& block,
+                                                          const Bounds& box, const Vec3& start,
+                                                          const Vec3& end) {
+  return avxMask<Check::Exact>(block, box, start, end, nullptr);
+}
+#endif
+
+}  // namespace
+
+PlanesMaskFunction planesMaskFunction() {
+#ifdef BSPF_AVX_MASKS
+  if (cpuHasAvx()) return avxPlanesMask;
+#endif
+  return planesMask;
+}
+
+ExactMaskFunction exactMaskFunction() {
+#ifdef BSPF_AVX_MASKS
+  if (cpuHasAvx()) return avxExactMask;
+#endif
+  return exactMask;
+}
+
+std::vector<MaskPath> availableMaskPaths() {
+  std::vector<MaskPath> paths{MaskPath::Scalar};
+#ifdef BSPF_SSE_MASKS
+  paths.push_back(MaskPath::Sse);
+#endif
+#ifdef BSPF_AVX_MASKS
+  if (cpuHasAvx()) paths.push_back(MaskPath::Avx);
+#endif
+  return paths;
+}
+
+std::uint32_t boxMaskOn(MaskPath path, const CandidateBlock& block, const Bounds& box) {
+  return maskOn<Check::Box>(path, block, box, Vec3::Zero(), Vec3::Zero(), nullptr);
+}
+
+std::uint32_t planesMaskOn(MaskPath path, const CandidateBlock& block, const Bounds& box,
+                           const Vec3& start, const Vec3& end, LaneSides& sides) {
+  return maskOn<Check::Planes>(path, block, box, start, end, &sides);
+}
+
+std::uint32_t exactMaskOn(MaskPath path, const CandidateBlock& block, const Bounds& box,
+                          const Vec3& start, const Vec3& end) {
+  return maskOn<Check::Exact>(path, block, box, start, end, nullptr);
 }
 
 std::uint32_t scalarBoxMask(const CandidateBlock& block, const Bounds& box) {

@@ -264,10 +264,10 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     // ground, the face under the body settles its neighbours.
     open.clear();
     const detail::SpherePath path(p, move);
+    const detail::ExactMaskFunction exactMask = detail::exactMaskFunction();
     for (const detail::CandidateBlock& block :
          local.around(world, swept, moveLength, radii, scratch, desiredEnd - start)) {
-      for (std::uint32_t bits = detail::exactMask(block, swept, from, to); bits != 0;
-           bits &= bits - 1) {
+      for (std::uint32_t bits = exactMask(block, swept, from, to); bits != 0; bits &= bits - 1) {
         const std::uint32_t slot = block.slot[std::countr_zero(bits)];
         const float before = impact.time;  // every new impact is earlier
         const double earliest = faceImpact(local.sphereD(slot), path, impact, penetrating);

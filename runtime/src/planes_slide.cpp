@@ -91,13 +91,14 @@ void offerLane(const World& world, const detail::CandidateBlock& block, int lane
 void findBlockingTriangle(const World& world, const Move& move, const Bounds& swept, auto& local,
                           std::span<const detail::CandidateBlock> blocks, Hit& best) {
   detail::LaneSides sides;
+  const detail::PlanesMaskFunction planesMask = detail::planesMaskFunction();
   for (const detail::CandidateBlock& block : blocks) {
     // The cheap tests for the whole block at once (the box, then the
     // pre-check's two dot products, whose values it keeps); the six planes
     // only for the few lanes that pass (about 4 a scan on the shared
     // levels, most of them beside the triangle the body touches).
-    for (std::uint32_t bits = detail::planesMask(block, swept, move.start, move.end, sides);
-         bits != 0; bits &= bits - 1) {
+    for (std::uint32_t bits = planesMask(block, swept, move.start, move.end, sides); bits != 0;
+         bits &= bits - 1) {
       const int lane = std::countr_zero(bits);
       offerLane(world, block, lane, sides.start[lane], sides.end[lane], move, local, best);
     }

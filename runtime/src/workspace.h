@@ -187,7 +187,7 @@ std::uint32_t boxMask(const CandidateBlock& block, const Bounds& box);
 /// The side values planesMask computed: lane i's signed distances, metres,
 /// of the move's start and end to its face plane. Valid for the lanes whose
 /// bit it set (the slide reads them rather than computing them again).
-struct alignas(16) LaneSides {
+struct alignas(32) LaneSides {
   float start[kBlockLanes], end[kBlockLanes];
 };
 /// Bit i set when lane i's box overlaps `box` and it passes the planes
@@ -200,7 +200,30 @@ std::uint32_t planesMask(const CandidateBlock& block, const Bounds& box, const V
 /// of the plane, and starts at most 1e-5 m behind it.
 std::uint32_t exactMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
                         const Vec3& end);
-/// The same three, a lane at a time: what the SSE versions above must
+/// planesMask and exactMask as the function they run on this CPU: a scan
+/// asks once and calls it for each of its blocks (one call a block, not two:
+/// the masks test the CPU, then call the widest path).
+using PlanesMaskFunction = std::uint32_t (*)(const CandidateBlock&, const Bounds&, const Vec3&,
+                                             const Vec3&, LaneSides&);
+using ExactMaskFunction = std::uint32_t (*)(const CandidateBlock&, const Bounds&, const Vec3&,
+                                            const Vec3&);
+PlanesMaskFunction planesMaskFunction();
+ExactMaskFunction exactMaskFunction();
+/// How the three masks above run: a lane at a time, 4 lanes per SSE
+/// instruction, or 8 per AVX instruction (where the CPU has AVX: chosen
+/// once at run time, so a build for the baseline x86-64 CPU uses it too).
+enum class MaskPath { Scalar, Sse, Avx };
+/// The paths this build and CPU can run, Scalar first; the masks above use
+/// the last.
+std::vector<MaskPath> availableMaskPaths();
+/// The masks on a given path, for the tests that hold every path to the
+/// scalar one. Precondition: `path` is in availableMaskPaths().
+std::uint32_t boxMaskOn(MaskPath path, const CandidateBlock& block, const Bounds& box);
+std::uint32_t planesMaskOn(MaskPath path, const CandidateBlock& block, const Bounds& box,
+                           const Vec3& start, const Vec3& end, LaneSides& sides);
+std::uint32_t exactMaskOn(MaskPath path, const CandidateBlock& block, const Bounds& box,
+                          const Vec3& start, const Vec3& end);
+/// The same three, a lane at a time: what the SSE and AVX versions must
 /// match bit for bit (the tests compare them), and what runs on CPUs
 /// without SSE.
 std::uint32_t scalarBoxMask(const CandidateBlock& block, const Bounds& box);

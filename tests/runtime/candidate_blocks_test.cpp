@@ -45,7 +45,12 @@ CandidateBlock randomBlock(std::mt19937& rng, int used) {
 
 }  // namespace
 
-TEST_CASE("the SSE block masks give the same bits as the one-lane reference") {
+TEST_CASE("the SSE and AVX block masks give the same bits as the one-lane reference") {
+  // Every path this CPU runs (the step uses the widest), each against the
+  // one-lane reference.
+  const std::vector<bspf::detail::MaskPath> paths = bspf::detail::availableMaskPaths();
+  const bspf::detail::MaskPath path = GENERATE_COPY(from_range(paths));
+  INFO("mask path " << int(path) << " of " << paths.size());
   std::mt19937 rng(7);
   int boxHits = 0, planesHits = 0, exactHits = 0;
   for (int round = 0; round < 20000; ++round) {
@@ -54,10 +59,18 @@ TEST_CASE("the SSE block masks give the same bits as the one-lane reference") {
     Bounds box{a.cwiseMin(b), a.cwiseMax(b)};
     if (round % 5 == 0) box.low.x() = block.highX[0];  // touching
     const Vec3 start = randomPoint(rng, 4), end = randomPoint(rng, 4);
-    const std::uint32_t boxBits = bspf::detail::boxMask(block, box);
+    const std::uint32_t boxBits = bspf::detail::boxMaskOn(path, block, box);
     bspf::detail::LaneSides sides, scalarSides;
-    const std::uint32_t planesBits = bspf::detail::planesMask(block, box, start, end, sides);
-    const std::uint32_t exactBits = bspf::detail::exactMask(block, box, start, end);
+    const std::uint32_t planesBits =
+        bspf::detail::planesMaskOn(path, block, box, start, end, sides);
+    const std::uint32_t exactBits = bspf::detail::exactMaskOn(path, block, box, start, end);
+    // What the step calls runs the widest path.
+    if (path == paths.back()) {
+      bspf::detail::LaneSides stepSides;
+      REQUIRE(bspf::detail::boxMask(block, box) == boxBits);
+      REQUIRE(bspf::detail::planesMask(block, box, start, end, stepSides) == planesBits);
+      REQUIRE(bspf::detail::exactMask(block, box, start, end) == exactBits);
+    }
     INFO("round " << round);
     REQUIRE(boxBits == bspf::detail::scalarBoxMask(block, box));
     REQUIRE(planesBits == bspf::detail::scalarPlanesMask(block, box, start, end, scalarSides));
