@@ -274,3 +274,27 @@ TEST_CASE("bodies on the arena move bit for bit the same with and without buried
     CHECK(differing == 0);
   }
 }
+
+TEST_CASE("bspc --keep-buried-faces keeps the faces the default drops", "[compiler][buried][cli]") {
+  const auto dir = bspf::test::freshTempDir("buried-cli");
+  bspc::Mesh mesh = bigBox();
+  append(mesh, boxMesh({1, 1, 1}, {2, 2, 2}));
+  std::string obj;
+  for (const Vector3d& v : mesh.vertices)
+    obj += "v " + std::to_string(v.x()) + " " + std::to_string(v.y()) + " " +
+           std::to_string(v.z()) + "\n";
+  for (const auto& t : mesh.triangles)
+    obj += "f " + std::to_string(t[0] + 1) + " " + std::to_string(t[1] + 1) + " " +
+           std::to_string(t[2] + 1) + "\n";
+  bspf::test::writeText(dir / "nested.obj", obj);
+  const auto compile = [&](const std::string& name, const std::string& option) {
+    return bspf::test::runBspc(bspf::test::quoted(dir / "nested.obj") + " -o " +
+                               bspf::test::quoted(dir / (name + ".bspf")) + " " + option);
+  };
+  const auto dropped = compile("default", "");
+  const auto kept = compile("kept", "--keep-buried-faces");
+  REQUIRE(dropped.status == 0);
+  REQUIRE(kept.status == 0);
+  CHECK_THAT(dropped.out, Catch::Contains(": 12 triangles"));
+  CHECK_THAT(kept.out, Catch::Contains(": 24 triangles"));
+}
