@@ -100,6 +100,13 @@ TEST_CASE("boxes touching each other or a solid's surface keep their faces", "[c
     // triangle has a corner at x = 0.0005, within the margin.
     CHECK(buriedOf(mesh, report) == std::vector<std::uint32_t>{14, 15});
   }
+  SECTION("the same turned 30 degrees, where the boxes' bounds do not decide") {
+    bspc::Mesh mesh = bigBox();
+    append(mesh, boxMesh({0.0005, 1, 1}, {1, 2, 2}));
+    const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.5236, Vector3d::UnitY()).toRotationMatrix();
+    for (Vector3d& v : mesh.vertices) v = turn * v;
+    CHECK(buriedOf(mesh, report) == std::vector<std::uint32_t>{14, 15});
+  }
   SECTION("inside, two millimetres from the surface: beyond the margin") {
     bspc::Mesh mesh = bigBox();
     append(mesh, boxMesh({0.002, 1, 1}, {1, 2, 2}));
