@@ -163,6 +163,10 @@ int main(int argc, char** argv) {
   app.add_flag("--keep-covered-faces", keepCovered,
                "Keep the faces lying against an opposite face of another solid (no body can "
                "touch them; dropped by default)");
+  bool keepBuried = false;
+  app.add_flag("--keep-buried-faces", keepBuried,
+               "Keep the faces lying inside another closed solid (no body outside the solids "
+               "can touch them; dropped by default)");
   app.add_option("--drop-surface", settings.clean.dropSurfaces,
                  "Leave out the triangles of this surface (material name; repeatable)")
       ->type_name("NAME")
@@ -239,6 +243,7 @@ command line (the error names the option).)");
     return 2;
   }
   settings.dropCoveredFaces = !keepCovered;
+  settings.dropBuriedFaces = !keepBuried;
   if (input.empty() || output.empty()) {
     std::cerr << "bspc: error: need an input mesh and -o OUTPUT.bspf (see bspc --help)\n";
     return 2;

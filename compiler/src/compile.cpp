@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include <bspc/build_tree.h>
+#include <bspc/buried.h>
 #include <bspc/compile.h>
 #include <bspc/import.h>
 #include <bspc/mesh_checks.h>
@@ -79,19 +80,42 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
   std::vector<std::string> warnings =
       timed(report.seconds.clean, report.cpuSeconds.clean, [&] { return meshWarnings(cleaned); });
   for (std::string& warning : warnings) report.warnings.push_back(std::move(warning));
-  say(settings, kTreeFirstPercent, "drop covered faces");
-  const Mesh clean = timed(report.seconds.edges, report.cpuSeconds.edges, [&] {
-    return settings.dropCoveredFaces ? dropCoveredFaces(cleaned, report.edges) : cleaned;
-  });
-  if (clean.triangles.empty())
-    throw CompileError("no triangle is left: every face lies against an opposite face");
-  // Fail fast: the tree can only add to this.
-  checkBlobBytes(minimumBlobBytes(clean.vertices.size(), clean.triangles.size()), true, clean,
-                 limits);
   // Workers only when there is more than one thread to run on.
   std::optional<bspf::ThreadPool> pool;
   if (threadCount(settings) > 1) pool.emplace(threadCount(settings));
   bspf::ThreadPool* threads = pool ? &*pool : nullptr;
+  // Both rules judge the cleaned mesh, whose solids are still closed:
+  // dropping covered faces opens them.
+  say(settings, kTreeFirstPercent, "drop covered and buried faces");
+  std::vector<bool> keep(cleaned.triangles.size(), true);
+  if (settings.dropCoveredFaces) {
+    const std::vector<bool> covered = timed(report.seconds.edges, report.cpuSeconds.edges,
+                                            [&] { return findCoveredFaces(cleaned); });
+    for (std::size_t t = 0; t < keep.size(); ++t) {
+      keep[t] = !covered[t];
+      report.edges.droppedCovered += covered[t];
+    }
+  }
+  if (settings.dropBuriedFaces) {
+    const std::vector<bool> buried = timed(report.seconds.buried, report.cpuSeconds.buried, [&] {
+      return findBuriedFaces(cleaned, report.buried, threads);
+    });
+    for (std::size_t t = 0; t < keep.size(); ++t)
+      if (buried[t] && keep[t]) {
+        keep[t] = false;
+        ++report.buried.dropped;
+      }
+  }
+  // With both rules off the cleaned mesh as it is, vertex order included.
+  const bool dropsAny = settings.dropCoveredFaces || settings.dropBuriedFaces;
+  const Mesh clean = timed(report.seconds.edges, report.cpuSeconds.edges,
+                           [&] { return dropsAny ? keepTriangles(cleaned, keep) : cleaned; });
+  if (clean.triangles.empty())
+    throw CompileError(
+        "no triangle is left: every face lies against an opposite face or inside another solid");
+  // Fail fast: the tree can only add to this.
+  checkBlobBytes(minimumBlobBytes(clean.vertices.size(), clean.triangles.size()), true, clean,
+                 limits);
   // A copy only when the reach rule is on: the mesh can be most of the
   // compile's memory.
   Mesh dropped;
@@ -233,13 +257,14 @@ std::string toJson(const CompileReport& r) {
   std::ostringstream out;
   out.precision(6);
   out << "{\"seconds\":{\"import\":" << r.seconds.import << ",\"clean\":" << r.seconds.clean
-      << ",\"edges\":" << r.seconds.edges << ",\"build_tree\":" << r.seconds.buildTree
-      << ",\"planes\":" << r.seconds.planes << ",\"reach\":" << r.seconds.reach
-      << ",\"write\":" << r.seconds.write << "},"
+      << ",\"edges\":" << r.seconds.edges << ",\"buried\":" << r.seconds.buried
+      << ",\"build_tree\":" << r.seconds.buildTree << ",\"planes\":" << r.seconds.planes
+      << ",\"reach\":" << r.seconds.reach << ",\"write\":" << r.seconds.write << "},"
       << "\"cpu_seconds\":{\"import\":" << r.cpuSeconds.import
       << ",\"clean\":" << r.cpuSeconds.clean << ",\"edges\":" << r.cpuSeconds.edges
-      << ",\"build_tree\":" << r.cpuSeconds.buildTree << ",\"planes\":" << r.cpuSeconds.planes
-      << ",\"reach\":" << r.cpuSeconds.reach << ",\"write\":" << r.cpuSeconds.write << "},"
+      << ",\"buried\":" << r.cpuSeconds.buried << ",\"build_tree\":" << r.cpuSeconds.buildTree
+      << ",\"planes\":" << r.cpuSeconds.planes << ",\"reach\":" << r.cpuSeconds.reach
+      << ",\"write\":" << r.cpuSeconds.write << "},"
       << "\"clean\":{\"input_vertices\":" << r.clean.inputVertices
       << ",\"input_triangles\":" << r.clean.inputTriangles
       << ",\"welded_vertices\":" << r.clean.weldedVertices
@@ -253,6 +278,9 @@ std::string toJson(const CompileReport& r) {
       << ",\"convex\":" << r.edges.convex << ",\"concave\":" << r.edges.concave
       << ",\"coplanar\":" << r.edges.coplanar
       << ",\"skipped_edge_planes\":" << r.edges.skippedEdgePlanes << "},"
+      << "\"buried\":{\"dropped\":" << r.buried.dropped << ",\"buried\":" << r.buried.buried
+      << ",\"closed_pieces\":" << r.buried.closedPieces << ",\"containers\":" << r.buried.containers
+      << "},"
       << "\"reach\":{\"applied\":" << (r.reach.applied ? "true" : "false")
       << ",\"dropped\":" << r.reach.dropped << ",\"cells\":" << r.reach.cells
       << ",\"reached_cells\":" << r.reach.reached << ",\"cell_metres\":" << r.reach.cellMetres

@@ -264,7 +264,7 @@ bool covered(const Geometry& g, std::uint32_t f, const std::vector<std::uint32_t
 
 }  // namespace
 
-Mesh dropCoveredFaces(const Mesh& mesh, EdgeReport& report) {
+std::vector<bool> findCoveredFaces(const Mesh& mesh) {
   const Geometry g(mesh);
   const EdgeMap edges(mesh);
   const std::vector<bool> backed = solidBehind(g, edges);
@@ -316,29 +316,51 @@ Mesh dropCoveredFaces(const Mesh& mesh, EdgeReport& report) {
     drop[f] = covered(g, f, cover);
   }
 
-  // The kept triangles in order, and the vertices they use in order of first use.
-  Mesh out;
-  std::vector<std::uint32_t> newIndex(mesh.vertices.size(), ~std::uint32_t(0));
-  for (std::uint32_t t = 0; t < n; ++t) {
-    if (drop[t]) {
-      ++report.droppedCovered;
-      continue;
-    }
-    std::array<std::uint32_t, 3> kept;
-    for (int k = 0; k < 3; ++k) {
-      std::uint32_t& index = newIndex[mesh.triangles[t][k]];
-      if (index == ~std::uint32_t(0)) {
-        index = std::uint32_t(out.vertices.size());
-        out.vertices.push_back(mesh.vertices[mesh.triangles[t][k]]);
-      }
-      kept[k] = index;
-    }
-    out.triangles.push_back(kept);
+  return drop;
+}
+
+Mesh dropCoveredFaces(const Mesh& mesh, EdgeReport& report) {
+  const std::vector<bool> covered = findCoveredFaces(mesh);
+  std::vector<bool> keep(covered.size());
+  for (std::size_t t = 0; t < covered.size(); ++t) {
+    keep[t] = !covered[t];
+    report.droppedCovered += covered[t];
   }
-  std::vector<bool> keep(n);
-  for (std::uint32_t t = 0; t < n; ++t) keep[t] = !drop[t];
-  carrySurfaces(mesh, keep, out);
-  out.warnings = mesh.warnings;
+  return keepTriangles(mesh, keep);
+}
+
+std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const Mesh& mesh) {
+  constexpr std::uint32_t kNone = ~std::uint32_t(0);
+  const std::size_t n = mesh.triangles.size();
+  const Geometry g(mesh);
+  const EdgeMap edges(mesh);
+  // Each edge's candidate: the other triangle of a two-triangle edge, or the
+  // first face turning from the triangle's back into its solid; kept when
+  // it runs the other way along the edge.
+  std::vector<std::array<std::pair<std::uint32_t, int>, 3>> candidate(n);
+  for (std::uint32_t t = 0; t < n; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const std::span<const EdgeUse> around = edges.around(t, k);
+      std::pair<std::uint32_t, int> found{kNone, 0};
+      if (around.size() == 2) {
+        const EdgeUse& other = around[0].triangle == t ? around[1] : around[0];
+        found = {other.triangle, other.k};
+      } else if (around.size() > 2) {
+        const Turn first = firstTurn(g, edges, t, k, -g.normal[t]);
+        if (first.triangle != t) found = {first.triangle, first.k};
+      }
+      if (found.first != kNone && !g.consistent(t, k, found.first, found.second))
+        found.first = kNone;
+      candidate[t][k] = found;
+    }
+  // Only pairs that choose each other: then every edge of a closed piece
+  // is cancelled by one running the other way.
+  std::vector<std::array<std::uint32_t, 3>> out(n, {kNone, kNone, kNone});
+  for (std::uint32_t t = 0; t < n; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const auto [u, j] = candidate[t][k];
+      if (u != kNone && candidate[u][j].first == t && candidate[u][j].second == k) out[t][k] = u;
+    }
   return out;
 }
 

@@ -36,7 +36,7 @@ std::uint64_t edgeKey(std::uint32_t from, std::uint32_t to) {
 
 }  // namespace
 
-PieceCounts countClosedPieces(const Mesh& mesh) {
+ClosedPieces findClosedPieces(const Mesh& mesh) {
   const std::size_t n = mesh.triangles.size();
   // Each directed edge, with the triangle using it, and how often it is used.
   std::unordered_map<std::uint64_t, std::uint32_t> firstUser, uses;
@@ -48,50 +48,80 @@ PieceCounts countClosedPieces(const Mesh& mesh) {
       firstUser.emplace(key, t);
       ++uses[key];
     }
-  // Joined across each edge; a piece is open when one of its edges has no
-  // reverse, or either direction is used more than once.
-  Pieces pieces(n);
-  std::vector<bool> open(n, false);
+  // An edge pairs two triangles when it is used once in each direction.
+  std::vector<std::array<std::uint32_t, 3>> across(
+      n, {ClosedPieces::kOpen, ClosedPieces::kOpen, ClosedPieces::kOpen});
   for (std::uint32_t t = 0; t < n; ++t)
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
       const auto reverse = uses.find(edgeKey(b, a));
-      if (reverse == uses.end() || reverse->second != 1 || uses[edgeKey(a, b)] != 1) {
+      if (reverse != uses.end() && reverse->second == 1 && uses[edgeKey(a, b)] == 1)
+        across[t][k] = firstUser[edgeKey(b, a)];
+    }
+  return findClosedPieces(mesh, std::move(across));
+}
+
+ClosedPieces findClosedPieces(const Mesh& mesh, std::vector<std::array<std::uint32_t, 3>> across) {
+  const std::size_t n = mesh.triangles.size();
+  // Joined across each paired edge; a piece is open when one of its edges
+  // is not paired.
+  Pieces pieces(n);
+  std::vector<bool> open(n, false);
+  for (std::uint32_t t = 0; t < n; ++t)
+    for (int k = 0; k < 3; ++k) {
+      if (across[t][k] == ClosedPieces::kOpen)
         open[t] = true;
-        continue;
-      }
-      pieces.join(t, firstUser[edgeKey(b, a)]);
+      else
+        pieces.join(t, across[t][k]);
     }
   // Per piece: open or not, signed volume (six times it, about the piece's
   // first corner, so a level far from the origin loses no precision), size.
+  // Roots are pieces' lowest triangles, so numbering them in order of their
+  // root numbers them in order of first triangle.
   struct Piece {
     bool open = false;
     double volume6 = 0;
     std::uint32_t triangles = 0;
-    Eigen::Vector3d origin;
   };
-  std::unordered_map<std::uint32_t, Piece> byRoot;
+  std::vector<Piece> byRoot(n);
   for (std::uint32_t t = 0; t < n; ++t) {
     const auto& tri = mesh.triangles[t];
-    auto [it, made] = byRoot.try_emplace(pieces.find(t));
-    Piece& piece = it->second;
-    if (made) piece.origin = mesh.vertices[tri[0]];
-    const Eigen::Vector3d a = mesh.vertices[tri[0]] - piece.origin,
-                          b = mesh.vertices[tri[1]] - piece.origin,
-                          c = mesh.vertices[tri[2]] - piece.origin;
+    const std::uint32_t root = pieces.find(t);
+    Piece& piece = byRoot[root];
+    const Eigen::Vector3d& origin = mesh.vertices[mesh.triangles[root][0]];
+    const Eigen::Vector3d a = mesh.vertices[tri[0]] - origin, b = mesh.vertices[tri[1]] - origin,
+                          c = mesh.vertices[tri[2]] - origin;
     piece.volume6 += a.dot(b.cross(c));
     piece.open = piece.open || open[t];
     ++piece.triangles;
   }
-  PieceCounts counts;
-  for (const auto& [root, piece] : byRoot) {
-    if (piece.open) continue;
-    ++counts.closedPieces;
-    if (piece.volume6 < 0) {
-      ++counts.insideOutPieces;
-      counts.insideOutTriangles += piece.triangles;
-    }
+  ClosedPieces out;
+  std::vector<std::uint32_t> index(n, ClosedPieces::kOpen);
+  for (std::uint32_t t = 0; t < n; ++t) {
+    const Piece& piece = byRoot[t];
+    if (piece.triangles == 0 || piece.open) continue;
+    index[t] = static_cast<std::uint32_t>(out.volume6.size());
+    out.volume6.push_back(piece.volume6);
+    out.triangleCount.push_back(piece.triangles);
   }
+  out.pieceOf.resize(n);
+  for (std::uint32_t t = 0; t < n; ++t) {
+    out.pieceOf[t] = index[pieces.find(t)];
+    if (out.pieceOf[t] == ClosedPieces::kOpen) across[t].fill(ClosedPieces::kOpen);
+  }
+  out.across = std::move(across);
+  return out;
+}
+
+PieceCounts countClosedPieces(const Mesh& mesh) {
+  const ClosedPieces pieces = findClosedPieces(mesh);
+  PieceCounts counts;
+  counts.closedPieces = static_cast<std::uint32_t>(pieces.volume6.size());
+  for (std::size_t p = 0; p < pieces.volume6.size(); ++p)
+    if (pieces.volume6[p] < 0) {
+      ++counts.insideOutPieces;
+      counts.insideOutTriangles += pieces.triangleCount[p];
+    }
   return counts;
 }
 

@@ -84,6 +84,9 @@ std::string describeOptions(const CompileSettings& s) {
       << " axis-candidates=" << s.tree.axisCandidatesPerAxis
       << " triangle-candidates=" << s.tree.triangleCandidates
       << " drop-covered-faces=" << (s.dropCoveredFaces ? 1 : 0);
+  // Only when off, so the line of a compile that keeps no buried face is
+  // the one bspc wrote before the rule.
+  if (!s.dropBuriedFaces) out << " drop-buried-faces=0";
   // The reach rule shapes the output too: how many points and which body.
   if (!s.reach.from.empty())
     out << " reach-points=" << s.reach.from.size() << " body-radii=" << s.reach.radiusXZ << ","

@@ -165,6 +165,7 @@ TEST_CASE("the tree of a fixed mesh is the one the one-thread builder of d2c698a
   settings.import.contained = false;  // no fork under ThreadSanitizer (scripts/test.sh)
   // d2c698a kept every face: the tree is compared on the same triangles.
   settings.dropCoveredFaces = false;
+  settings.dropBuriedFaces = false;
   bspc::compileFile(dir / "busy.obj", dir / "busy.bspf", settings);
   const bspf::OpenResult opened = bspf::openWorld(dir / "busy.bspf");
   REQUIRE(opened);

@@ -2,6 +2,7 @@
 // bspc/compile.h: the whole compile, stage by stage.
 #pragma once
 
+#include <bspc/buried.h>
 #include <bspc/clean.h>
 #include <bspc/edges.h>
 #include <bspc/mesh.h>
@@ -18,7 +19,8 @@ namespace bspc {
 
 /// Wall-clock seconds per stage.
 struct StageTimes {
-  double import = 0, clean = 0, edges = 0, reach = 0, buildTree = 0, planes = 0, write = 0;
+  double import = 0, clean = 0, edges = 0, buried = 0, reach = 0, buildTree = 0, planes = 0,
+         write = 0;
 };
 
 struct CompileReport {
@@ -26,6 +28,8 @@ struct CompileReport {
   ReachReport reach;
   /// Covered faces dropped, edges by kind, edge planes skipped.
   EdgeReport edges;
+  /// Faces lying inside another closed solid (settings.dropBuriedFaces).
+  BuriedReport buried;
   StageTimes seconds;
   /// CPU seconds per stage, all of this process's threads together (the
   /// contained import's child is not counted: its time is the wait).
@@ -40,7 +44,7 @@ struct CompileReport {
   std::vector<std::string> warnings;
 };
 
-/// import, clean, drop covered faces, drop faces no body can reach
+/// import, clean, drop covered faces and faces buried in other solids, drop faces no body can reach
 /// (settings.reach, when it names points), build tree, classify edges and
 /// precompute planes, write: `input` (any format
 /// assimp reads, a regular file) to the blob at `output`, and, when

@@ -46,6 +46,19 @@ struct EdgeReport {
 /// order. Precondition: a cleaned mesh (welded, no degenerate triangle).
 Mesh dropCoveredFaces(const Mesh& mesh, EdgeReport& report);
 
+/// Per triangle: whether dropCoveredFaces drops it.
+std::vector<bool> findCoveredFaces(const Mesh& mesh);
+
+/// Per triangle, edge k (corner k to corner k + 1): the triangle across it
+/// that closes the same solid, or ~0u. Across an edge of two triangles, the
+/// other one; across an edge more share (solids touching along it), the
+/// first face met turning about the edge from the triangle's back, into its
+/// solid. Either way only when it runs along the edge the other way and
+/// chooses the triangle back, so pieces joined across these pairs are
+/// closed surfaces (findClosedPieces in mesh_checks.h). Precondition: a
+/// cleaned mesh.
+std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const Mesh& mesh);
+
 /// A triangle's three edges (edge k from corner k to corner k + 1).
 struct TriangleEdges {
   std::array<EdgeKind, 3> kind{};

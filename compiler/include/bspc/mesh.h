@@ -59,6 +59,12 @@ inline void carrySurfaces(const Mesh& mesh, const std::vector<bool>& keep, Mesh&
   }
 }
 
+/// The triangles of `mesh` for which keep[t] holds, in their order, with
+/// the vertices they use in order of first use, their surfaces
+/// (carrySurfaces) and `mesh`'s warnings. For the stages that drop triangles
+/// after clean.
+Mesh keepTriangles(const Mesh& mesh, const std::vector<bool>& keep);
+
 /// A compile failure caused by the input or the settings. The message is one
 /// line; the driver prefixes the file it concerns.
 class CompileError : public std::runtime_error {

@@ -5,6 +5,7 @@
 
 #include <bspc/mesh.h>
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -22,6 +23,35 @@ struct PieceCounts {
   /// Triangles of those pieces.
   std::uint32_t insideOutTriangles = 0;
 };
+
+/// Each triangle's closed piece, as PieceCounts defines them.
+struct ClosedPieces {
+  static constexpr std::uint32_t kOpen = ~std::uint32_t(0);
+  /// Per triangle: the index of its closed piece, or kOpen when the set of
+  /// triangles joined to it by shared edges is not closed. Pieces are
+  /// numbered in the order of their first triangle.
+  std::vector<std::uint32_t> pieceOf;
+  /// Per closed piece: six times its signed volume, cubic metres (negative:
+  /// inside out), and its triangles.
+  std::vector<double> volume6;
+  std::vector<std::uint32_t> triangleCount;
+  /// Per triangle of a closed piece, edge k (corner k to corner k + 1): the
+  /// triangle across it, which runs along it the other way. kOpen for the
+  /// triangles of open pieces.
+  std::vector<std::array<std::uint32_t, 3>> across;
+};
+
+/// Finds `mesh`'s closed pieces. Vertices are matched by index, so weld
+/// first (cleanMesh). Linear in the mesh's size; deterministic.
+ClosedPieces findClosedPieces(const Mesh& mesh);
+
+/// The closed pieces for a given pairing of triangle edges: across[t][k] is
+/// the triangle that closes triangle t's edge k (running along it the other
+/// way, and paired back to t), or ClosedPieces::kOpen. Triangles are joined
+/// across paired edges; a piece is closed when all its edges are paired.
+/// findClosedPieces(mesh) pairs by vertex index; solidNeighbours (edges.h)
+/// also pairs edges that touching solids share.
+ClosedPieces findClosedPieces(const Mesh& mesh, std::vector<std::array<std::uint32_t, 3>> across);
 
 /// Counts `mesh`'s closed pieces and the inside-out ones among them.
 /// Vertices are matched by index, so weld first (cleanMesh). Linear in the

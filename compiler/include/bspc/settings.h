@@ -167,6 +167,11 @@ struct CompileSettings {
   /// cleaned face is kept, and a level of closed solids stays a union of
   /// closed meshes (what a winding-number inside test needs).
   bool dropCoveredFaces = true;
+  /// Drop the faces lying inside another closed solid, every corner at
+  /// least kBuriedMargin (1 mm) inside it (findBuriedFaces, bspc/buried.h).
+  /// Off (`--keep-buried-faces`): they are kept, as a level of closed solids
+  /// overlapping one another needs for a winding-number inside test.
+  bool dropBuriedFaces = true;
   /// Called with a one-line status, a stage's name and how far it is
   /// ("build tree 42%"), as the compile goes on; may be empty. From the
   /// compiling thread or the tree build's, one call at a time. bspc prints
