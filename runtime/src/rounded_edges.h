@@ -42,18 +42,21 @@ inline bool beyondEdges(const schema::TrianglePlanes& planes, const Vec3& point)
 inline bool ridesOverEdge(const World& world, std::uint32_t triangle, const Vec3& point,
                           const Vec3& start, const Vec3& end, EllipsoidRadii radii,
                           float walkableNormalY) {
+  const schema::Triangle& corners = world.triangles()[triangle];
+  const float highest =
+      std::max({world.vertices()[corners.v0()].y(), world.vertices()[corners.v1()].y(),
+                world.vertices()[corners.v2()].y()});
+  const float below = std::min(start.y(), end.y()) - highest;
+  // A triangle reaching above the centre's path (most walls a body walks
+  // into) fails the test below whatever `least` is: no square root for it.
+  if (!(below >= 0)) return false;
   // The unit sphere's normal at a point `a` below its centre (and
   // sqrt(1 - a^2) across) is, in world space, along (sqrt(1 - a^2) / rxz,
   // a / ry); it is walkable from a = least on.
   const float w2 = walkableNormalY * walkableNormalY;
   const float inverseXz2 = 1 / (radii.xz * radii.xz), inverseY2 = 1 / (radii.y * radii.y);
   const float least = std::sqrt(w2 * inverseXz2 / ((1 - w2) * inverseY2 + w2 * inverseXz2));
-  const schema::Triangle& corners = world.triangles()[triangle];
-  const float highest =
-      std::max({world.vertices()[corners.v0()].y(), world.vertices()[corners.v1()].y(),
-                world.vertices()[corners.v2()].y()});
-  return std::min(start.y(), end.y()) - highest >= least * radii.y &&
-         beyondEdges(world.trianglePlanes()[triangle], point);
+  return below >= least * radii.y && beyondEdges(world.trianglePlanes()[triangle], point);
 }
 
 }  // namespace bspf::detail
