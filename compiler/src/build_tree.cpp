@@ -332,15 +332,18 @@ class TreeBuilder {
     Lists all;
     all.order.resize(mesh_.triangles.size());
     for (std::uint32_t i = 0; i < all.size(); ++i) all.order[i] = i;
+    // The three axes sorted at once, one a thread: a total order (ties by
+    // index), so the same lists on any thread.
     if (settings_.candidates != SplitCandidates::Triangle)
-      for (int axis = 0; axis < 3; ++axis) {
-        all.byAxis[axis] = all.order;
-        std::sort(all.byAxis[axis].begin(), all.byAxis[axis].end(),
-                  [&](std::uint32_t a, std::uint32_t b) {
-                    return centroids_[a][axis] < centroids_[b][axis] ||
-                           (centroids_[a][axis] == centroids_[b][axis] && a < b);
-                  });
-      }
+      runParallel(pool_, 3, 1, [&](int, std::size_t first, std::size_t last) {
+        for (std::size_t axis = first; axis < last; ++axis) {
+          std::vector<std::pair<double, std::uint32_t>> keyed(all.size());
+          for (std::uint32_t i = 0; i < all.size(); ++i) keyed[i] = {centroids_[i][axis], i};
+          std::sort(keyed.begin(), keyed.end());
+          all.byAxis[axis].resize(all.size());
+          for (std::uint32_t i = 0; i < all.size(); ++i) all.byAxis[axis][i] = keyed[i].second;
+        }
+      });
     Box bounds{mesh_.vertices.front(), mesh_.vertices.front()};
     for (const Eigen::Vector3d& v : mesh_.vertices) {
       bounds.low = bounds.low.cwiseMin(v);
