@@ -30,6 +30,23 @@ bool earliestRoot(double a, double b, double c, double& t) {
   return true;
 }
 
+// A lower bound on the time (fraction of the move) after its plane's that
+// the unit sphere takes to touch a triangle, from where it touched the
+// plane: at a point `squaredGap` (squared) away, in the plane, from every
+// point of the triangle, whose corners lie up to `offPlane` off that plane.
+// Every point of the triangle is then at least sqrt(1 + squaredGap) -
+// offPlane from the centre, which must come within 1, moving `length` per
+// unit of time; sqrt(1 + x) - 1 = x / (sqrt(1 + x) + 1) >= x / (2 + x / 2).
+// The slacks: the float normal's length and rounding (1e-6, far above
+// both), and the rounding of the edge stage's roots (its worst, a grazing
+// path's, is about 1e-8), so an edge stage skipped for the bound would not
+// have found an impact before it either. 0 when the gap gives nothing.
+double clearanceTime(double squaredGap, double offPlane, double length) {
+  constexpr double kSlack = 1e-6, kRootSlack = 1e-7;
+  const double gap = squaredGap * (1 - kSlack);
+  return std::max(0.0, (gap / (2 + gap / 2) - offPlane - kSlack) / length - kRootSlack);
+}
+
 }  // namespace
 
 namespace detail {
@@ -69,8 +86,8 @@ double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bo
     }
     // Within reach of the plane, not of the triangle: an edge or corner may
     // be touched, but not before the centre has covered the gap.
-    const double gap = distance - 1, travel = v.norm();
-    return gap < travel ? gap / travel : kSettled;
+    const double gap = distance - 1;
+    return gap < path.length ? gap / path.length : kSettled;
   }
   // Outside the plane's reach, the sphere touches no point of the triangle
   // before it touches the plane, at distance 1: if it never does within the
@@ -83,13 +100,16 @@ double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bo
   if (t < best.time) {
     const V corners[3] = {a, tri.b - p, tri.c - p};
     const V touch = t * v - n;
-    bool inside = true;
-    for (int k = 0; k < 3 && inside; ++k)
-      inside = n.dot((corners[(k + 1) % 3] - corners[k]).cross(touch - corners[k])) >= 0;
-    if (inside) {
-      best = {float(t), n.cast<float>()};
-      return kSettled;
+    for (int k = 0; k < 3; ++k) {
+      const V edge = corners[(k + 1) % 3] - corners[k];
+      const double side = n.dot(edge.cross(touch - corners[k]));
+      // Outside edge k by side / |edge| at least (the edge's part along n
+      // only lengthens it), so outside the triangle by that much.
+      if (!(side >= 0))
+        return t + clearanceTime(side * side / edge.squaredNorm(), tri.offPlane, path.length);
     }
+    best = {float(t), n.cast<float>()};
+    return kSettled;
   }
   return t;
 }

@@ -8,6 +8,8 @@
 #include <bspf/geometry.h>
 #include <bspf/world.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -62,11 +64,20 @@ void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact&
 // per candidate (the conversion is exact) rather than once per test.
 struct TriangleD {
   Eigen::Vector3d a, b, c, normal;
+  /// How far b and c lie off the plane of `normal` through `a` (the normal
+  /// is rounded to float, so a large or thin triangle's corners leave it):
+  /// what the face stage's bound on its edges allows for. Infinite (no
+  /// bound) when the triangle seen along `normal` is wound the other way,
+  /// which only a degenerate triangle's rounded normal can do.
+  double offPlane = 0;
   explicit TriangleD(const Triangle& t)
       : a(t.a.cast<double>()),
         b(t.b.cast<double>()),
         c(t.c.cast<double>()),
-        normal(t.normal.cast<double>()) {}
+        normal(t.normal.cast<double>()),
+        offPlane(normal.dot((b - a).cross(c - a)) > 0
+                     ? std::max(std::abs(normal.dot(b - a)), std::abs(normal.dot(c - a)))
+                     : std::numeric_limits<double>::infinity()) {}
   TriangleD() = default;
 };
 
@@ -75,16 +86,19 @@ struct TriangleD {
 // candidate.
 struct SpherePath {
   Eigen::Vector3d start, move;
-  SpherePath(const Vec3& p, const Vec3& v) : start(p.cast<double>()), move(v.cast<double>()) {}
+  double length;  ///< |move|
+  SpherePath(const Vec3& p, const Vec3& v)
+      : start(p.cast<double>()), move(v.cast<double>()), length(move.norm()) {}
 };
 
 // earliestImpact's first stage: a start behind the triangle (no impact),
 // within the unit distance of it (penetration), and a first touch inside the
 // face. Returns the time (fraction of the move) before which no edge or
-// corner of the triangle can be touched: its plane's, or, for a start within
-// reach of the plane but not of the triangle, the time to cover the gap;
-// infinity when no edge or corner can be touched within the move or improve
-// on `best`.
+// corner of the triangle can be touched: its plane's, later by the time to
+// reach the triangle from where the plane was touched when that point was
+// tested and found outside, or, for a start within reach of the plane but
+// not of the triangle, the time to cover the gap; infinity when no edge or
+// corner can be touched within the move or improve on `best`.
 double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bool& penetrating);
 
 // earliestImpact's second stage: the edges and corners.
