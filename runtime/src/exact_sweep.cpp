@@ -64,7 +64,8 @@ void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact&
   if (faceImpact(triangle, path, best, penetrating) < best.time) edgeImpact(triangle, path, best);
 }
 
-double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bool& penetrating) {
+double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bool& penetrating,
+                  MeasuredDistance* measured) {
   using V = Eigen::Vector3d;
   constexpr double kSettled = std::numeric_limits<double>::infinity();
   const V& p = path.start;
@@ -74,10 +75,18 @@ double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bo
   const double startSide = -n.dot(a);
   if (startSide < 0) return kSettled;  // behind: one-sided
   if (startSide < 1) {
+    // Out of reach of the triangle for the whole move, by the last distance
+    // measured, whatever the rounding of this one (1e-9, thousands of times
+    // the rounding of either): as settled as the measure would find it.
+    if (measured && measured->distance >= 0) {
+      const double spare = measured->distance - 1 - path.length - 1e-9;
+      if (spare > 0 && (p - measured->from).squaredNorm() < spare * spare) return kSettled;
+    }
     // Already within reach (recovery could not clear it all): never let the
     // move go deeper. Moving towards the closest point is an impact now.
     const V closest = closestPointOnTriangle<V>(V::Zero(), a, tri.b - p, tri.c - p);
     const double distance = closest.norm();
+    if (measured) *measured = {p, distance};
     if (distance < 1) {
       penetrating = true;
       const V away = distance > 1e-9 ? V(-closest / distance) : n;
@@ -181,20 +190,17 @@ class ExactCandidates : public LocalCandidates<detail::ExactCold, Make> {
         world_(world),
         toSphere_(toSphere) {}
 
-  const Triangle& sphere(std::uint32_t slot) { return made(slot).sphere; }
-  const detail::TriangleD& sphereD(std::uint32_t slot) { return made(slot).sphereD; }
-
- private:
+  /// The candidate in `slot`, in sphere space.
   detail::ExactCold& made(std::uint32_t slot) {
     detail::ExactCold& cold = (*this)[slot];
     if (!cold.ready) {
-      cold.sphere = sphereSpaceTriangle(world_, cold.triangle, toSphere_);
-      cold.sphereD = detail::TriangleD(cold.sphere);
+      cold.sphere = detail::TriangleD(sphereSpaceTriangle(world_, cold.triangle, toSphere_));
       cold.ready = true;
     }
     return cold;
   }
 
+ private:
   const World& world_;
   Vec3 toSphere_;
 };
@@ -230,7 +236,10 @@ void recoverFromPenetration(const World& world, Vec3& p, const Vec3& toSphere, f
          local.around(world, here, moveLength, radii, scratch)) {
       for (std::uint32_t bits = detail::boxMask(block, here); bits != 0; bits &= bits - 1) {
         const std::uint32_t slot = block.slot[std::countr_zero(bits)];
-        const Triangle& tri = local.sphere(slot);
+        const detail::TriangleD& triangle = local.made(slot).sphere;
+        // The float triangle (exact: the double one was made from it).
+        const Triangle tri{triangle.a.cast<float>(), triangle.b.cast<float>(),
+                           triangle.c.cast<float>(), triangle.normal.cast<float>()};
         if (tri.normal.dot(p - tri.a) < 0) continue;
         const Vec3 closest = closestPointOnTriangle<Vec3>(p, tri.a, tri.b, tri.c);
         const Vec3 offset = p - closest;
@@ -290,7 +299,8 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
            bits &= bits - 1) {
         const std::uint32_t slot = block.slot[std::countr_zero(bits)];
         const float before = impact.time;  // every new impact is earlier
-        const double earliest = faceImpact(local.sphereD(slot), path, impact, penetrating);
+        detail::ExactCold& cold = local.made(slot);
+        const double earliest = faceImpact(cold.sphere, path, impact, penetrating, &cold.measured);
         if (impact.time != before) impactSlot = slot;
         if (earliest < 1) open.push_back({earliest, slot});
       }
@@ -298,7 +308,7 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     for (const auto& [earliest, slot] : open)
       if (earliest < impact.time) {
         const float before = impact.time;
-        edgeImpact(local.sphereD(slot), path, impact);
+        edgeImpact(local.made(slot).sphere, path, impact);
         if (impact.time != before) impactSlot = slot;
       }
     // A start in penetration (pushed there by another body, or placed there)

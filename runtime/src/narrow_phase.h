@@ -91,6 +91,16 @@ struct SpherePath {
       : start(p.cast<double>()), move(v.cast<double>()), length(move.norm()) {}
 };
 
+// The distance from a point to a triangle, both in sphere space, as the face
+// stage last measured it (a start within reach of the triangle's plane): the
+// distance from any point near `from` is at least `distance` less how far
+// that point is from `from`, which settles the triangle for most of a body's
+// next sweeps without measuring again. Negative: none measured.
+struct MeasuredDistance {
+  Eigen::Vector3d from;
+  double distance = -1;
+};
+
 // earliestImpact's first stage: a start behind the triangle (no impact),
 // within the unit distance of it (penetration), and a first touch inside the
 // face. Returns the time (fraction of the move) before which no edge or
@@ -98,8 +108,11 @@ struct SpherePath {
 // reach the triangle from where the plane was touched when that point was
 // tested and found outside, or, for a start within reach of the plane but
 // not of the triangle, the time to cover the gap; infinity when no edge or
-// corner can be touched within the move or improve on `best`.
-double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bool& penetrating);
+// corner can be touched within the move or improve on `best`. `measured`
+// (optional): the triangle's last measured distance, read and kept up to
+// date; the result is the same with or without it.
+double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bool& penetrating,
+                  MeasuredDistance* measured = nullptr);
 
 // earliestImpact's second stage: the edges and corners.
 void edgeImpact(const TriangleD& tri, const SpherePath& path, Impact& best);
