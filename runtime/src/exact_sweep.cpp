@@ -110,12 +110,18 @@ double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bo
     const V corners[3] = {a, tri.b - p, tri.c - p};
     const V touch = t * v - n;
     for (int k = 0; k < 3; ++k) {
-      const V edge = corners[(k + 1) % 3] - corners[k];
-      const double side = n.dot(edge.cross(touch - corners[k]));
+      // n . (edge x (touch - corner)), written out as edgeImpact's are.
+      const V& from = corners[k];
+      const V& to = corners[(k + 1) % 3];
+      const double ex = to.x() - from.x(), ey = to.y() - from.y(), ez = to.z() - from.z();
+      const double rx = touch.x() - from.x(), ry = touch.y() - from.y(), rz = touch.z() - from.z();
+      const double side =
+          n.x() * (ey * rz - ez * ry) + n.y() * (ez * rx - ex * rz) + n.z() * (ex * ry - ey * rx);
       // Outside edge k by side / |edge| at least (the edge's part along n
       // only lengthens it), so outside the triangle by that much.
       if (!(side >= 0))
-        return t + clearanceTime(side * side / edge.squaredNorm(), tri.offPlane, path.length);
+        return t + clearanceTime(side * side / (ex * ex + ey * ey + ez * ez), tri.offPlane,
+                                 path.length);
     }
     best = {float(t), n.cast<float>()};
     return kSettled;
@@ -130,21 +136,34 @@ void edgeImpact(const TriangleD& tri, const SpherePath& path, Impact& best) {
   const V corners[3] = {tri.a - p, tri.b - p, tri.c - p};  // relative to the start
   for (int k = 0; k < 3; ++k) {
     // Edge k: the infinite cylinder of radius 1 around it, then the segment.
+    // Written out coordinate by coordinate, in the operations and order of
+    // Eigen's (dot products summed x, y, then z), which here spent a third
+    // more instructions moving values between packed and scalar registers.
     const V& e0 = corners[k];
-    const V d = corners[(k + 1) % 3] - e0;
-    const double dd = d.squaredNorm();
-    const V w = -e0 - (-e0).dot(d) / dd * d;  // start, perpendicular to the edge
-    const V vPerp = v - v.dot(d) / dd * d;
+    const V& e1 = corners[(k + 1) % 3];
+    const double dx = e1.x() - e0.x(), dy = e1.y() - e0.y(), dz = e1.z() - e0.z();
+    const double dd = dx * dx + dy * dy + dz * dz;
+    // The start and the move, perpendicular to the edge.
+    const double alongStart = (-e0.x() * dx + -e0.y() * dy + -e0.z() * dz) / dd;
+    const double wx = -e0.x() - alongStart * dx, wy = -e0.y() - alongStart * dy,
+                 wz = -e0.z() - alongStart * dz;
+    const double alongMove = (v.x() * dx + v.y() * dy + v.z() * dz) / dd;
+    const double ux = v.x() - alongMove * dx, uy = v.y() - alongMove * dy,
+                 uz = v.z() - alongMove * dz;
     double t;
-    if (earliestRoot(vPerp.squaredNorm(), 2 * vPerp.dot(w), w.squaredNorm() - 1, t) &&
+    if (earliestRoot(ux * ux + uy * uy + uz * uz, 2 * (ux * wx + uy * wy + uz * wz),
+                     (wx * wx + wy * wy + wz * wz) - 1, t) &&
         t < best.time) {
+      const V d(dx, dy, dz);
       const V centre = t * v;
       const double along = (centre - e0).dot(d) / dd;
       if (along >= 0 && along <= 1)
         best = {float(t), (centre - (e0 + along * d)).normalized().cast<float>(), true};
     }
     // Corner k.
-    if (earliestRoot(v.squaredNorm(), -2 * v.dot(e0), e0.squaredNorm() - 1, t) && t < best.time)
+    if (earliestRoot(path.squaredLength, -2 * (v.x() * e0.x() + v.y() * e0.y() + v.z() * e0.z()),
+                     (e0.x() * e0.x() + e0.y() * e0.y() + e0.z() * e0.z()) - 1, t) &&
+        t < best.time)
       best = {float(t), (t * v - e0).normalized().cast<float>(), true};
   }
 }

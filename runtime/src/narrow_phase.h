@@ -86,9 +86,13 @@ struct TriangleD {
 // candidate.
 struct SpherePath {
   Eigen::Vector3d start, move;
-  double length;  ///< |move|
+  double squaredLength;  ///< |move|^2
+  double length;         ///< |move|
   SpherePath(const Vec3& p, const Vec3& v)
-      : start(p.cast<double>()), move(v.cast<double>()), length(move.norm()) {}
+      : start(p.cast<double>()),
+        move(v.cast<double>()),
+        squaredLength(move.squaredNorm()),
+        length(std::sqrt(squaredLength)) {}
 };
 
 // The distance from a point to a triangle, both in sphere space, as the face
