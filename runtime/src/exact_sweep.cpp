@@ -33,25 +33,25 @@ bool earliestRoot(double a, double b, double c, double& t) {
 // A lower bound on the time (fraction of the move) after its plane's that
 // the unit sphere takes to touch a triangle, from where it touched the
 // plane: at a point `squaredGap` (squared) away, in the plane, from every
-// point of the triangle, whose corners lie up to `offPlane` off that plane.
-// Every point of the triangle is then at least sqrt(1 + squaredGap) -
-// offPlane from the centre, which must come within 1, moving `length` per
-// unit of time; sqrt(1 + x) - 1 = x / (sqrt(1 + x) + 1) >= x / (2 + x / 2).
-// That holds before the plane's time too, but a triangle off its plane can
-// be touched before it, while the centre is less than offPlane further
-// from the plane (`approach` per unit of time): then no bound (0) unless
-// the gap is wider than what the sphere reaches of the plane then
-// (sqrt(2 offPlane)) and slides meanwhile.
+// point of the triangle, which rises at most `rise` off that plane towards
+// the sphere. Every point of the triangle is then at least sqrt(1 +
+// squaredGap) - rise from the centre, which must come within 1, moving
+// `length` per unit of time; sqrt(1 + x) - 1 = x / (sqrt(1 + x) + 1) >=
+// x / (2 + x / 2). That holds before the plane's time too, but a triangle
+// rising off its plane can be touched before it, while the centre is less
+// than `rise` further from the plane (`approach` per unit of time): then
+// no bound (0) unless the gap is wider than what the sphere reaches of the
+// plane then (sqrt(2 rise)) and slides meanwhile.
 // The slacks: the float normal's length and rounding (1e-6, far above
 // both), and the rounding of the edge stage's roots (its worst, a grazing
 // path's, is about 1e-8), so an edge stage skipped for the bound would not
 // have found an impact before it either. 0 when the gap gives nothing.
-double clearanceTime(double squaredGap, double offPlane, double approach, double length) {
+double clearanceTime(double squaredGap, double rise, double approach, double length) {
   constexpr double kSlack = 1e-6, kRootSlack = 1e-7;
   const double gap = squaredGap * (1 - kSlack);
-  const double early = std::sqrt(2 * offPlane) + offPlane * length / approach + kSlack;
+  const double early = std::sqrt(2 * rise) + rise * length / approach + kSlack;
   if (!(gap > early * early)) return 0;
-  return std::max(0.0, (gap / (2 + gap / 2) - offPlane - kSlack) / length - kRootSlack);
+  return std::max(0.0, (gap / (2 + gap / 2) - rise - kSlack) / length - kRootSlack);
 }
 
 }  // namespace
@@ -127,8 +127,8 @@ double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bo
       // Outside edge k by side / |edge| at least (the edge's part along n
       // only lengthens it), so outside the triangle by that much.
       if (!(side >= 0))
-        return t + clearanceTime(side * side / (ex * ex + ey * ey + ez * ez), tri.offPlane,
-                                 -approach, path.length);
+        return t + clearanceTime(side * side / (ex * ex + ey * ey + ez * ez), tri.rise, -approach,
+                                 path.length);
     }
     best = {float(t), n.cast<float>()};
     return kSettled;

@@ -64,20 +64,21 @@ void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact&
 // per candidate (the conversion is exact) rather than once per test.
 struct TriangleD {
   Eigen::Vector3d a, b, c, normal;
-  /// How far b and c lie off the plane of `normal` through `a` (the normal
-  /// is rounded to float, so a large or thin triangle's corners leave it):
-  /// what the face stage's bound on its edges allows for. Infinite (no
-  /// bound) when the triangle seen along `normal` is wound the other way,
-  /// which only a degenerate triangle's rounded normal can do.
-  double offPlane = 0;
+  /// How far b or c rises off the plane of `normal` through `a`, on the
+  /// side the normal faces (the normal is rounded to float, so a large or
+  /// thin triangle's corners leave that plane): what the face stage's bound
+  /// on its edges allows for. Infinite (no bound) when the triangle seen
+  /// along `normal` is wound the other way, which only a degenerate
+  /// triangle's rounded normal can do.
+  double rise = 0;
   explicit TriangleD(const Triangle& t)
       : a(t.a.cast<double>()),
         b(t.b.cast<double>()),
         c(t.c.cast<double>()),
         normal(t.normal.cast<double>()),
-        offPlane(normal.dot((b - a).cross(c - a)) > 0
-                     ? std::max(std::abs(normal.dot(b - a)), std::abs(normal.dot(c - a)))
-                     : std::numeric_limits<double>::infinity()) {}
+        rise(normal.dot((b - a).cross(c - a)) > 0
+                 ? std::max({0.0, normal.dot(b - a), normal.dot(c - a)})
+                 : std::numeric_limits<double>::infinity()) {}
   TriangleD() = default;
 };
 

@@ -98,7 +98,7 @@ TEST_CASE(
     const Impact before = earlier;
     bspf::detail::edgeImpact(triangle, path, earlier);
     INFO("round " << round << " bound " << bound << " plane " << planeTime << " edge time "
-                  << earlier.time << " off the plane " << triangle.offPlane);
+                  << earlier.time << " rise " << triangle.rise);
     REQUIRE(earlier.time == before.time);
     REQUIRE(earlier.normal == before.normal);
   }
