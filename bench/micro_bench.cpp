@@ -258,6 +258,38 @@ void exactPerTriangle(benchmark::State& state, const Level& level) {
   });
 }
 
+// The face stage alone (faceImpact) on the sweeps whose start is within reach
+// of the triangle's plane, where it measures the distance to the triangle:
+// with the distance each measured from the sweep's start beforehand (the
+// measure a body's candidates keep from sweep to sweep, ExactCold::
+// measured), which settles those out of reach for the whole move without
+// measuring again, or without.
+void faceStageWithinReach(benchmark::State& state, const Level& level, bool measured) {
+  struct Prepared {
+    bspf::detail::TriangleD triangle;
+    bspf::detail::SpherePath path;
+    bspf::detail::MeasuredDistance distance;
+  };
+  std::vector<Prepared> prepared;
+  for (const SweepInput& x : level.sweeps) {
+    if (x.triangle.normal.dot(x.p - x.triangle.a) >= 1) continue;
+    Prepared in{bspf::detail::TriangleD(x.triangle), bspf::detail::SpherePath(x.p, x.v), {}};
+    bspf::detail::Impact impact;
+    bool penetrating = false;
+    bspf::detail::faceImpact(in.triangle, in.path, impact, penetrating, &in.distance);
+    prepared.push_back(in);
+  }
+  cycle(state, prepared, [&](const Prepared& x) {
+    bspf::detail::Impact impact;
+    bool penetrating = false;
+    bspf::detail::MeasuredDistance distance = x.distance;
+    const double earliest = bspf::detail::faceImpact(x.triangle, x.path, impact, penetrating,
+                                                     measured ? &distance : nullptr);
+    benchmark::DoNotOptimize(earliest);
+    benchmark::DoNotOptimize(penetrating);
+  });
+}
+
 void candidateTriangles(benchmark::State& state, const Level& level) {
   bspf::SweepScratch scratch;
   std::vector<std::uint32_t> candidates;
@@ -361,6 +393,10 @@ int main(int argc, char** argv) {
                                  std::cref(level));
     benchmark::RegisterBenchmark(("ExactPerTriangle" + suffix).c_str(), exactPerTriangle,
                                  std::cref(level));
+    benchmark::RegisterBenchmark(("FaceStageWithinReach/measured" + suffix).c_str(),
+                                 faceStageWithinReach, std::cref(level), true);
+    benchmark::RegisterBenchmark(("FaceStageWithinReach/closest" + suffix).c_str(),
+                                 faceStageWithinReach, std::cref(level), false);
     benchmark::RegisterBenchmark(("CandidateTriangles" + suffix).c_str(), candidateTriangles,
                                  std::cref(level));
     benchmark::RegisterBenchmark(("StoredBoxes64/sse" + suffix).c_str(), storedBoxes,

@@ -30,6 +30,30 @@ bool earliestRoot(double a, double b, double c, double& t) {
   return true;
 }
 
+// A lower bound on the time (fraction of the move) after its plane's that
+// the unit sphere takes to touch a triangle, from where it touched the
+// plane: at a point `squaredGap` (squared) away, in the plane, from every
+// point of the triangle, which rises at most `rise` off that plane towards
+// the sphere. Every point of the triangle is then at least sqrt(1 +
+// squaredGap) - rise from the centre, which must come within 1, moving
+// `length` per unit of time; sqrt(1 + x) - 1 = x / (sqrt(1 + x) + 1) >=
+// x / (2 + x / 2). That holds before the plane's time too, but a triangle
+// rising off its plane can be touched before it, while the centre is less
+// than `rise` further from the plane (`approach` per unit of time): then
+// no bound (0) unless the gap is wider than what the sphere reaches of the
+// plane then (sqrt(2 rise)) and slides meanwhile.
+// The slacks: the float normal's length and rounding (1e-6, far above
+// both), and the rounding of the edge stage's roots (its worst, a grazing
+// path's, is about 1e-8), so an edge stage skipped for the bound would not
+// have found an impact before it either. 0 when the gap gives nothing.
+double clearanceTime(double squaredGap, double rise, double approach, double length) {
+  constexpr double kSlack = 1e-6, kRootSlack = 1e-7;
+  const double gap = squaredGap * (1 - kSlack);
+  const double early = std::sqrt(2 * rise) + rise * length / approach + kSlack;
+  if (!(gap > early * early)) return 0;
+  return std::max(0.0, (gap / (2 + gap / 2) - rise - kSlack) / length - kRootSlack);
+}
+
 }  // namespace
 
 namespace detail {
@@ -47,7 +71,8 @@ void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact&
   if (faceImpact(triangle, path, best, penetrating) < best.time) edgeImpact(triangle, path, best);
 }
 
-double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bool& penetrating) {
+double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bool& penetrating,
+                  MeasuredDistance* measured) {
   using V = Eigen::Vector3d;
   constexpr double kSettled = std::numeric_limits<double>::infinity();
   const V& p = path.start;
@@ -57,10 +82,18 @@ double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bo
   const double startSide = -n.dot(a);
   if (startSide < 0) return kSettled;  // behind: one-sided
   if (startSide < 1) {
+    // Out of reach of the triangle for the whole move, by the last distance
+    // measured, whatever the rounding of this one (1e-9, thousands of times
+    // the rounding of either): as settled as the measure would find it.
+    if (measured && measured->distance >= 0) {
+      const double spare = measured->distance - 1 - path.length - 1e-9;
+      if (spare > 0 && (p - measured->from).squaredNorm() < spare * spare) return kSettled;
+    }
     // Already within reach (recovery could not clear it all): never let the
     // move go deeper. Moving towards the closest point is an impact now.
     const V closest = closestPointOnTriangle<V>(V::Zero(), a, tri.b - p, tri.c - p);
     const double distance = closest.norm();
+    if (measured) *measured = {p, distance};
     if (distance < 1) {
       penetrating = true;
       const V away = distance > 1e-9 ? V(-closest / distance) : n;
@@ -69,8 +102,8 @@ double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bo
     }
     // Within reach of the plane, not of the triangle: an edge or corner may
     // be touched, but not before the centre has covered the gap.
-    const double gap = distance - 1, travel = v.norm();
-    return gap < travel ? gap / travel : kSettled;
+    const double gap = distance - 1;
+    return gap < path.length ? gap / path.length : kSettled;
   }
   // Outside the plane's reach, the sphere touches no point of the triangle
   // before it touches the plane, at distance 1: if it never does within the
@@ -83,13 +116,22 @@ double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bo
   if (t < best.time) {
     const V corners[3] = {a, tri.b - p, tri.c - p};
     const V touch = t * v - n;
-    bool inside = true;
-    for (int k = 0; k < 3 && inside; ++k)
-      inside = n.dot((corners[(k + 1) % 3] - corners[k]).cross(touch - corners[k])) >= 0;
-    if (inside) {
-      best = {float(t), n.cast<float>()};
-      return kSettled;
+    for (int k = 0; k < 3; ++k) {
+      // n . (edge x (touch - corner)), written out as edgeImpact's are.
+      const V& from = corners[k];
+      const V& to = corners[(k + 1) % 3];
+      const double ex = to.x() - from.x(), ey = to.y() - from.y(), ez = to.z() - from.z();
+      const double rx = touch.x() - from.x(), ry = touch.y() - from.y(), rz = touch.z() - from.z();
+      const double side =
+          n.x() * (ey * rz - ez * ry) + n.y() * (ez * rx - ex * rz) + n.z() * (ex * ry - ey * rx);
+      // Outside edge k by side / |edge| at least (the edge's part along n
+      // only lengthens it), so outside the triangle by that much.
+      if (!(side >= 0))
+        return t + clearanceTime(side * side / (ex * ex + ey * ey + ez * ez), tri.rise, -approach,
+                                 path.length);
     }
+    best = {float(t), n.cast<float>()};
+    return kSettled;
   }
   return t;
 }
@@ -101,21 +143,34 @@ void edgeImpact(const TriangleD& tri, const SpherePath& path, Impact& best) {
   const V corners[3] = {tri.a - p, tri.b - p, tri.c - p};  // relative to the start
   for (int k = 0; k < 3; ++k) {
     // Edge k: the infinite cylinder of radius 1 around it, then the segment.
+    // Written out coordinate by coordinate, in the operations and order of
+    // Eigen's (dot products summed x, y, then z), which here spent a third
+    // more instructions moving values between packed and scalar registers.
     const V& e0 = corners[k];
-    const V d = corners[(k + 1) % 3] - e0;
-    const double dd = d.squaredNorm();
-    const V w = -e0 - (-e0).dot(d) / dd * d;  // start, perpendicular to the edge
-    const V vPerp = v - v.dot(d) / dd * d;
+    const V& e1 = corners[(k + 1) % 3];
+    const double dx = e1.x() - e0.x(), dy = e1.y() - e0.y(), dz = e1.z() - e0.z();
+    const double dd = dx * dx + dy * dy + dz * dz;
+    // The start and the move, perpendicular to the edge.
+    const double alongStart = (-e0.x() * dx + -e0.y() * dy + -e0.z() * dz) / dd;
+    const double wx = -e0.x() - alongStart * dx, wy = -e0.y() - alongStart * dy,
+                 wz = -e0.z() - alongStart * dz;
+    const double alongMove = (v.x() * dx + v.y() * dy + v.z() * dz) / dd;
+    const double ux = v.x() - alongMove * dx, uy = v.y() - alongMove * dy,
+                 uz = v.z() - alongMove * dz;
     double t;
-    if (earliestRoot(vPerp.squaredNorm(), 2 * vPerp.dot(w), w.squaredNorm() - 1, t) &&
+    if (earliestRoot(ux * ux + uy * uy + uz * uz, 2 * (ux * wx + uy * wy + uz * wz),
+                     (wx * wx + wy * wy + wz * wz) - 1, t) &&
         t < best.time) {
+      const V d(dx, dy, dz);
       const V centre = t * v;
       const double along = (centre - e0).dot(d) / dd;
       if (along >= 0 && along <= 1)
         best = {float(t), (centre - (e0 + along * d)).normalized().cast<float>(), true};
     }
     // Corner k.
-    if (earliestRoot(v.squaredNorm(), -2 * v.dot(e0), e0.squaredNorm() - 1, t) && t < best.time)
+    if (earliestRoot(path.squaredLength, -2 * (v.x() * e0.x() + v.y() * e0.y() + v.z() * e0.z()),
+                     (e0.x() * e0.x() + e0.y() * e0.y() + e0.z() * e0.z()) - 1, t) &&
+        t < best.time)
       best = {float(t), (t * v - e0).normalized().cast<float>(), true};
   }
 }
@@ -161,20 +216,17 @@ class ExactCandidates : public LocalCandidates<detail::ExactCold, Make> {
         world_(world),
         toSphere_(toSphere) {}
 
-  const Triangle& sphere(std::uint32_t slot) { return made(slot).sphere; }
-  const detail::TriangleD& sphereD(std::uint32_t slot) { return made(slot).sphereD; }
-
- private:
+  /// The candidate in `slot`, in sphere space.
   detail::ExactCold& made(std::uint32_t slot) {
     detail::ExactCold& cold = (*this)[slot];
     if (!cold.ready) {
-      cold.sphere = sphereSpaceTriangle(world_, cold.triangle, toSphere_);
-      cold.sphereD = detail::TriangleD(cold.sphere);
+      cold.sphere = detail::TriangleD(sphereSpaceTriangle(world_, cold.triangle, toSphere_));
       cold.ready = true;
     }
     return cold;
   }
 
+ private:
   const World& world_;
   Vec3 toSphere_;
 };
@@ -210,7 +262,10 @@ void recoverFromPenetration(const World& world, Vec3& p, const Vec3& toSphere, f
          local.around(world, here, moveLength, radii, scratch)) {
       for (std::uint32_t bits = detail::boxMask(block, here); bits != 0; bits &= bits - 1) {
         const std::uint32_t slot = block.slot[std::countr_zero(bits)];
-        const Triangle& tri = local.sphere(slot);
+        const detail::TriangleD& triangle = local.made(slot).sphere;
+        // The float triangle (exact: the double one was made from it).
+        const Triangle tri{triangle.a.cast<float>(), triangle.b.cast<float>(),
+                           triangle.c.cast<float>(), triangle.normal.cast<float>()};
         if (tri.normal.dot(p - tri.a) < 0) continue;
         const Vec3 closest = closestPointOnTriangle<Vec3>(p, tri.a, tri.b, tri.c);
         const Vec3 offset = p - closest;
@@ -270,7 +325,8 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
       for (std::uint32_t bits = exactMask(block, swept, from, to); bits != 0; bits &= bits - 1) {
         const std::uint32_t slot = block.slot[std::countr_zero(bits)];
         const float before = impact.time;  // every new impact is earlier
-        const double earliest = faceImpact(local.sphereD(slot), path, impact, penetrating);
+        detail::ExactCold& cold = local.made(slot);
+        const double earliest = faceImpact(cold.sphere, path, impact, penetrating, &cold.measured);
         if (impact.time != before) impactSlot = slot;
         if (earliest < 1) open.push_back({earliest, slot});
       }
@@ -278,7 +334,7 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     for (const auto& [earliest, slot] : open)
       if (earliest < impact.time) {
         const float before = impact.time;
-        edgeImpact(local.sphereD(slot), path, impact);
+        edgeImpact(local.made(slot).sphere, path, impact);
         if (impact.time != before) impactSlot = slot;
       }
     // A start in penetration (pushed there by another body, or placed there)

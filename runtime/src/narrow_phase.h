@@ -8,6 +8,8 @@
 #include <bspf/geometry.h>
 #include <bspf/world.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -62,11 +64,21 @@ void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact&
 // per candidate (the conversion is exact) rather than once per test.
 struct TriangleD {
   Eigen::Vector3d a, b, c, normal;
+  /// How far b or c rises off the plane of `normal` through `a`, on the
+  /// side the normal faces (the normal is rounded to float, so a large or
+  /// thin triangle's corners leave that plane): what the face stage's bound
+  /// on its edges allows for. Infinite (no bound) when the triangle seen
+  /// along `normal` is wound the other way, which only a degenerate
+  /// triangle's rounded normal can do.
+  double rise = 0;
   explicit TriangleD(const Triangle& t)
       : a(t.a.cast<double>()),
         b(t.b.cast<double>()),
         c(t.c.cast<double>()),
-        normal(t.normal.cast<double>()) {}
+        normal(t.normal.cast<double>()),
+        rise(normal.dot((b - a).cross(c - a)) > 0
+                 ? std::max({0.0, normal.dot(b - a), normal.dot(c - a)})
+                 : std::numeric_limits<double>::infinity()) {}
   TriangleD() = default;
 };
 
@@ -75,17 +87,37 @@ struct TriangleD {
 // candidate.
 struct SpherePath {
   Eigen::Vector3d start, move;
-  SpherePath(const Vec3& p, const Vec3& v) : start(p.cast<double>()), move(v.cast<double>()) {}
+  double squaredLength;  ///< |move|^2
+  double length;         ///< |move|
+  SpherePath(const Vec3& p, const Vec3& v)
+      : start(p.cast<double>()),
+        move(v.cast<double>()),
+        squaredLength(move.squaredNorm()),
+        length(std::sqrt(squaredLength)) {}
+};
+
+// The distance from a point to a triangle, both in sphere space, as the face
+// stage last measured it (a start within reach of the triangle's plane): the
+// distance from any point near `from` is at least `distance` less how far
+// that point is from `from`, which settles the triangle for most of a body's
+// next sweeps without measuring again. Negative: none measured.
+struct MeasuredDistance {
+  Eigen::Vector3d from;
+  double distance = -1;
 };
 
 // earliestImpact's first stage: a start behind the triangle (no impact),
 // within the unit distance of it (penetration), and a first touch inside the
 // face. Returns the time (fraction of the move) before which no edge or
-// corner of the triangle can be touched: its plane's, or, for a start within
-// reach of the plane but not of the triangle, the time to cover the gap;
-// infinity when no edge or corner can be touched within the move or improve
-// on `best`.
-double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bool& penetrating);
+// corner of the triangle can be touched: its plane's, later by the time to
+// reach the triangle from where the plane was touched when that point was
+// tested and found outside, or, for a start within reach of the plane but
+// not of the triangle, the time to cover the gap; infinity when no edge or
+// corner can be touched within the move or improve on `best`. `measured`
+// (optional): the triangle's last measured distance, read and kept up to
+// date; the result is the same with or without it.
+double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bool& penetrating,
+                  MeasuredDistance* measured = nullptr);
 
 // earliestImpact's second stage: the edges and corners.
 void edgeImpact(const TriangleD& tri, const SpherePath& path, Impact& best);

@@ -245,16 +245,19 @@ struct PlanesCold {
 };
 
 /// A triangle as the exact sweep tests it for one body, beyond its
-/// CandidateBlock lane: in sphere space, made on first use.
+/// CandidateBlock lane: in sphere space (in double: its float corners and
+/// normal exactly), made on first use.
 struct ExactCold {
   std::uint32_t triangle;
   bool ready = false;
-  Triangle sphere;
-  TriangleD sphereD;  ///< `sphere` in double, for the sweep's two stages
+  TriangleD sphere;
+  /// The face stage's last distance from the body to it (kept over frames).
+  MeasuredDistance measured;
   /// Makes this triangle `t`'s, not yet in sphere space.
   void reset(std::uint32_t t) {
     triangle = t;
     ready = false;
+    measured.distance = -1;
   }
 };
 

@@ -1,0 +1,158 @@
+// SPDX-License-Identifier: MIT
+// The exact sweep's two stages (private: runtime/src/narrow_phase.h,
+// exact_sweep.cpp): the time the face stage returns for a triangle it
+// leaves open is one before which the edge stage finds nothing, so the
+// slide may skip the edge stage of a triangle whose time is not before the
+// earliest impact found so far.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "narrow_phase.h"
+
+using bspf::Vec3;
+using bspf::detail::Impact;
+using bspf::detail::SpherePath;
+using bspf::detail::Triangle;
+using bspf::detail::TriangleD;
+
+namespace {
+
+// A triangle as sphereSpaceTriangle makes one: float corners, the float
+// normal of its winding. `size` and `thinness` (0: equilateral-ish, near
+// 1: a sliver) vary how far the rounded normal lets corners leave the plane.
+Triangle randomTriangle(std::mt19937& rng, float size, float thinness) {
+  std::uniform_real_distribution<float> u(-1, 1);
+  const Vec3 origin(u(rng) * 50, u(rng) * 50, u(rng) * 50);
+  const Vec3 along = Vec3(u(rng), u(rng), u(rng)).normalized();
+  Vec3 across = along.cross(Vec3(u(rng), u(rng), u(rng))).normalized();
+  Triangle t;
+  t.a = origin;
+  t.b = origin + along * size;
+  t.c = origin + along * (size * (0.5f + 0.5f * u(rng))) + across * (size * (1 - thinness));
+  t.normal = (t.b - t.a).cross(t.c - t.a).normalized();
+  return t;
+}
+
+// The largest float not above `time`: an earlier impact found at the very
+// time the bound allows, as a float.
+float floatAtOrBelow(double time) {
+  const float f = float(time);
+  return double(f) <= time ? f : std::nextafter(f, -std::numeric_limits<float>::infinity());
+}
+
+}  // namespace
+
+TEST_CASE(
+    "no edge or corner of a triangle the face stage leaves open is touched before the time it "
+    "returns, on random triangles and paths that touch the plane just outside them",
+    "[runtime][exact-sweep]") {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int open = 0, boundAfterPlane = 0, edgeTouched = 0;
+  for (int round = 0; round < 200000; ++round) {
+    const float size = round % 4 == 0 ? 200.0f : float(0.2 + 10 * unit(rng));
+    const float thinness = round % 3 == 0 ? float(1 - std::pow(10.0, -1 - 3 * unit(rng))) : 0.0f;
+    const Triangle tri = randomTriangle(rng, size, thinness);
+    const TriangleD triangle(tri);
+    // The point where the sphere touches the plane: just beyond an edge
+    // (by up to 0.3, often much less), in the plane.
+    const Eigen::Vector3d corners[3] = {triangle.a, triangle.b, triangle.c};
+    const int k = int(rng() % 3);
+    const Eigen::Vector3d& from = corners[k];
+    const Eigen::Vector3d& to = corners[(k + 1) % 3];
+    const Eigen::Vector3d n = triangle.normal.normalized();
+    const Eigen::Vector3d outward = (to - from).cross(n).normalized();
+    const double beyond = 0.3 * std::pow(unit(rng), 3);
+    const Eigen::Vector3d touch = from + (to - from) * (-0.1 + 1.2 * unit(rng)) + outward * beyond;
+    // A move that reaches the plane at `touchTime` there, approaching it
+    // from 10 degrees to head-on, sliding along it at up to 1.5.
+    const double touchTime = 0.05 + 0.9 * unit(rng);
+    const double approach = 0.005 + unit(rng);
+    const Eigen::Vector3d tangent =
+        n.cross(Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5)).normalized();
+    const Eigen::Vector3d move = -n * approach + tangent * (1.5 * unit(rng));
+    const Eigen::Vector3d start = touch + n - touchTime * move;
+    const SpherePath path(start.cast<float>(), move.cast<float>());
+
+    Impact face;
+    bool penetrating = false;
+    const double bound = bspf::detail::faceImpact(triangle, path, face, penetrating);
+    if (face.time <= 1 || penetrating || !(bound < 1)) continue;  // met on the face, or closed
+    ++open;
+    Impact first;
+    bspf::detail::edgeImpact(triangle, path, first);
+    if (first.time <= 1) ++edgeTouched;
+    // The plane's time, as the face stage computes it: the bound the slide
+    // used before this one, which skipped the edge stage against an earlier
+    // impact at that time or before.
+    const double planeTime =
+        (-triangle.normal.dot(triangle.a - path.start) - 1) / -triangle.normal.dot(path.move);
+    const float latest = floatAtOrBelow(bound);
+    if (!(latest > planeTime)) continue;
+    ++boundAfterPlane;
+    // What the slide now skips too: the edge stage against an earlier
+    // impact at (as a float) the bound. It must find nothing earlier.
+    Impact earlier{latest, Vec3::UnitY()};
+    const Impact before = earlier;
+    bspf::detail::edgeImpact(triangle, path, earlier);
+    INFO("round " << round << " bound " << bound << " plane " << planeTime << " edge time "
+                  << earlier.time << " rise " << triangle.rise);
+    REQUIRE(earlier.time == before.time);
+    REQUIRE(earlier.normal == before.normal);
+  }
+  // The rounds must reach the cases the bound is for: open triangles whose
+  // edges are touched soon after the plane, the bound later than the plane.
+  CHECK(open > 50000);
+  CHECK(edgeTouched > 20000);
+  CHECK(boundAfterPlane > 20000);
+}
+
+TEST_CASE(
+    "the face stage gives the same answer with a triangle's last measured distance as without, "
+    "on random walks near triangles within reach of their planes",
+    "[runtime][exact-sweep]") {
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int settledByMeasure = 0, measured = 0, open = 0;
+  for (int walk = 0; walk < 5000; ++walk) {
+    const Triangle tri = randomTriangle(rng, float(0.2 + 10 * unit(rng)), 0.0f);
+    const TriangleD triangle(tri);
+    const Eigen::Vector3d n = triangle.normal.normalized();
+    const Eigen::Vector3d centre = (triangle.a + triangle.b + triangle.c) / 3;
+    // Starting beside the triangle, within reach of its plane, then
+    // stepping about as a walker does from one sweep to the next.
+    const Eigen::Vector3d outward = (triangle.b - triangle.a).cross(n).normalized();
+    Eigen::Vector3d start =
+        centre + (triangle.a - centre) * 1.05 + outward * (1 + unit(rng)) + n * (0.9 * unit(rng));
+    bspf::detail::MeasuredDistance last;
+    for (int step = 0; step < 40; ++step) {
+      Eigen::Vector3d move(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5);
+      move *= 0.6 * unit(rng);
+      const SpherePath path(start.cast<float>(), move.cast<float>());
+      Impact withMeasure, without;
+      bool penetratingWith = false, penetratingWithout = false;
+      const bspf::detail::MeasuredDistance before = last;
+      const double a =
+          bspf::detail::faceImpact(triangle, path, withMeasure, penetratingWith, &last);
+      const double b = bspf::detail::faceImpact(triangle, path, without, penetratingWithout);
+      REQUIRE(a == b);
+      REQUIRE(withMeasure.time == without.time);
+      REQUIRE(withMeasure.normal == without.normal);
+      REQUIRE(penetratingWith == penetratingWithout);
+      if (before.distance >= 0 && last.from == before.from && last.distance == before.distance &&
+          -triangle.normal.dot(triangle.a - path.start) < 1)
+        ++settledByMeasure;
+      else if (last.distance >= 0)
+        ++measured;
+      if (b < 1) ++open;
+      // The next sweep starts near where this one ended, sometimes the
+      // other side of the plane (the face stage then ignores the triangle).
+      start += move * unit(rng);
+    }
+  }
+  CHECK(settledByMeasure > 20000);
+  CHECK(measured > 20000);
+  CHECK(open > 500);
+}
