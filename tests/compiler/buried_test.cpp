@@ -19,12 +19,8 @@ namespace {
 
 using bspf::test::append;
 using bspf::test::boxMesh;
+using bspf::test::cleaned;
 using Eigen::Vector3d;
-
-bspc::Mesh cleaned(const bspc::Mesh& mesh) {
-  bspc::CleanReport report;
-  return bspc::cleanMesh(mesh, {}, report);
-}
 
 // The buried triangles of `mesh` (cleaned first), by index into the cleaned
 // mesh, whose triangles keep the input's order here (nothing is dropped).
@@ -256,28 +252,15 @@ TEST_CASE("bodies on the arena move bit for bit the same with and without buried
   REQUIRE(!spawns.empty());
   for (const bspf::CollisionMethod method :
        {bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep}) {
-    std::vector<bspf::Body> bodiesA;
+    std::vector<bspf::Body> bodies;
     for (const Eigen::Vector3f& spawn : spawns) {
       bspf::Body body;
       body.position = spawn + bspf::Vec3(0, 0.3f, 0);
       body.radii = {0.45f, 0.85f};
       body.settings.method = method;
-      bodiesA.push_back(body);
+      bodies.push_back(body);
     }
-    std::vector<bspf::Body> bodiesB = bodiesA;
-    bspf::StepScratch scratch;
-    int differing = 0;
-    for (int frame = 0; frame < 400; ++frame) {
-      for (std::size_t i = 0; i < bodiesA.size(); ++i) {
-        // Each body walks a direction of its own, turning now and then, into
-        // walls, over edges and down ramps.
-        const float angle = 2.4f * float(i) + 0.9f * float(frame / 60);
-        const bspf::Vec3 force(40 * std::cos(angle), 0, 40 * std::sin(angle));
-        bspf::stepBody(*a.world, bodiesA[i], force, 1 / 60.0f, scratch);
-        bspf::stepBody(*b.world, bodiesB[i], force, 1 / 60.0f, scratch);
-        differing += bodiesA[i].position != bodiesB[i].position;
-      }
-    }
+    const int differing = bspf::test::differingWalkSteps(*a.world, *b.world, bodies, 400);
     CHECK(differing == 0);
   }
 }

@@ -15,12 +15,8 @@ namespace {
 using bspc::EdgeKind;
 using bspf::test::append;
 using bspf::test::boxMesh;
+using bspf::test::cleaned;
 using Eigen::Vector3d;
-
-bspc::Mesh cleaned(const bspc::Mesh& mesh) {
-  bspc::CleanReport report;
-  return bspc::cleanMesh(mesh, {}, report);
-}
 
 // The kinds of every edge of `mesh`, counted.
 std::array<int, 4> kindCounts(const bspc::Mesh& mesh) {

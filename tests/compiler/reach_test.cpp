@@ -197,28 +197,15 @@ TEST_CASE("bodies move bit for bit the same with and without the faces --reach-f
   REQUIRE(b);
   for (const bspf::CollisionMethod method :
        {bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep}) {
-    std::vector<bspf::Body> bodiesA, bodiesB;
+    std::vector<bspf::Body> bodies;
     for (std::size_t i = 0; i < reach.reach.from.size(); ++i) {
       bspf::Body body;
       body.position = reach.reach.from[i].cast<float>() + bspf::Vec3(0, 0.3f, 0);
       body.radii = {0.45f, 0.85f};
       body.settings.method = method;
-      bodiesA.push_back(body);
+      bodies.push_back(body);
     }
-    bodiesB = bodiesA;
-    bspf::StepScratch scratch;
-    int differing = 0;
-    for (int frame = 0; frame < 400; ++frame) {
-      for (std::size_t i = 0; i < bodiesA.size(); ++i) {
-        // Each body walks a direction of its own, turning now and then, into
-        // walls, over edges and down ramps.
-        const float angle = 2.4f * float(i) + 0.9f * float(frame / 60);
-        const bspf::Vec3 force(40 * std::cos(angle), 0, 40 * std::sin(angle));
-        bspf::stepBody(*a.world, bodiesA[i], force, 1 / 60.0f, scratch);
-        bspf::stepBody(*b.world, bodiesB[i], force, 1 / 60.0f, scratch);
-        differing += bodiesA[i].position != bodiesB[i].position;
-      }
-    }
+    const int differing = bspf::test::differingWalkSteps(*a.world, *b.world, bodies, 400);
     CHECK(differing == 0);
   }
 }

@@ -1,11 +1,14 @@
 // SPDX-License-Identifier: MIT
 #include "support/test_support.h"
 
+#include <bspc/clean.h>
+
 #ifndef _WIN32
 #include <sys/wait.h>
 #endif
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -48,6 +51,28 @@ void append(bspc::Mesh& mesh, const bspc::Mesh& part) {
   mesh.vertices.insert(mesh.vertices.end(), part.vertices.begin(), part.vertices.end());
   for (const auto& t : part.triangles)
     mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+}
+
+bspc::Mesh cleaned(const bspc::Mesh& mesh) {
+  bspc::CleanReport report;
+  return bspc::cleanMesh(mesh, {}, report);
+}
+
+int differingWalkSteps(const bspf::World& a, const bspf::World& b, std::vector<bspf::Body> bodies,
+                       int frames) {
+  std::vector<bspf::Body> other = bodies;
+  bspf::StepScratch scratch;
+  int differing = 0;
+  for (int frame = 0; frame < frames; ++frame) {
+    for (std::size_t i = 0; i < bodies.size(); ++i) {
+      const float angle = 2.4f * float(i) + 0.9f * float(frame / 60);
+      const bspf::Vec3 force(40 * std::cos(angle), 0, 40 * std::sin(angle));
+      bspf::stepBody(a, bodies[i], force, 1 / 60.0f, scratch);
+      bspf::stepBody(b, other[i], force, 1 / 60.0f, scratch);
+      differing += bodies[i].position != other[i].position;
+    }
+  }
+  return differing;
 }
 
 std::vector<std::uint8_t> compile(const bspc::Mesh& mesh, const bspc::CompileSettings& settings) {

@@ -5,6 +5,7 @@
 #include <bspc/compile.h>
 #include <bspc/mesh.h>
 #include <bspf/geometry.h>
+#include <bspf/movement.h>
 #include <bspf/world.h>
 
 #include <cstddef>
@@ -57,6 +58,9 @@ bspc::Mesh boxMesh(const Eigen::Vector3d& low, const Eigen::Vector3d& high);
 /// Appends `part` to `mesh` (vertices not shared).
 void append(bspc::Mesh& mesh, const bspc::Mesh& part);
 
+/// `mesh` through bspc's clean stage with default settings.
+bspc::Mesh cleaned(const bspc::Mesh& mesh);
+
 /// Compiles a mesh in memory with default settings (or `settings`).
 std::vector<std::uint8_t> compile(const bspc::Mesh& mesh,
                                   const bspc::CompileSettings& settings = {});
@@ -68,6 +72,13 @@ struct CompiledMesh {
   explicit CompiledMesh(const bspc::Mesh& mesh, const bspc::CompileSettings& settings = {})
       : bytes(compile(mesh, settings)), world(*bspf::viewWorld(bytes.span()).world) {}
 };
+
+/// Steps `bodies` in `a` and a copy of them in `b` for `frames` frames of
+/// 1/60 s, body by body, each walking a direction of its own that turns
+/// every second (into walls, over edges, down ramps); returns how many
+/// body-steps ended at a different position in the two worlds.
+int differingWalkSteps(const bspf::World& a, const bspf::World& b, std::vector<bspf::Body> bodies,
+                       int frames);
 
 /// The point of triangle `t` of `world` with weights u and v on its second
 /// and third corners, folded back into the triangle when u + v > 1 (so u, v
