@@ -173,17 +173,17 @@ std::uint32_t maskOn(MaskPath path, const CandidateBlock& block, const Bounds& b
   }
 }
 
+// The widest path this build and CPU run (availableMaskPaths' last), asked
+// once.
+MaskPath widestPath() {
+  static const MaskPath path = availableMaskPaths().back();
+  return path;
+}
+
 template <Check check>
 std::uint32_t mask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
                    const Vec3& end, LaneSides* sides = nullptr) {
-#ifdef BSPF_AVX_MASKS
-  if (cpuHasAvx()) return avxMask<check>(block, box, start, end, sides);
-#endif
-#ifdef BSPF_SSE_MASKS
-  return sseMask<check>(block, box, start, end, sides);
-#else
-  return scalarMask<check>(block, box, start, end, sides);
-#endif
+  return maskOn<check>(widestPath(), block, box, start, end, sides);
 }
 
 }  // namespace
@@ -223,14 +223,14 @@ __attribute__((target("avx"))) std::uint32_t avxExactMask(const CandidateBlock& 
 
 PlanesMaskFunction planesMaskFunction() {
 #ifdef BSPF_AVX_MASKS
-  if (cpuHasAvx()) return avxPlanesMask;
+  if (widestPath() == MaskPath::Avx) return avxPlanesMask;
 #endif
   return planesMask;
 }
 
 ExactMaskFunction exactMaskFunction() {
 #ifdef BSPF_AVX_MASKS
-  if (cpuHasAvx()) return avxExactMask;
+  if (widestPath() == MaskPath::Avx) return avxExactMask;
 #endif
   return exactMask;
 }
