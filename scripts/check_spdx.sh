@@ -17,7 +17,7 @@ sources=$(grep -E '\.(cpp|h|hpp|fbs|cmake|in|sh|py|gp|1)$|(^|/)CMakeLists\.txt$|
 missing=0 checked=0
 while read -r f; do
   checked=$((checked + 1))
-  if ! head -n 3 "$f" | grep -q 'SPDX-License-Identifier: MIT'; then
+  if ! grep -q 'SPDX-License-Identifier: MIT' <<<"$(head -n 3 "$f")"; then
     echo "no SPDX-License-Identifier line: $f"
     missing=$((missing + 1))
   fi

@@ -60,7 +60,10 @@ find-package)
     -DCONSUMER_SOURCE="$consumer_src" >"$work/installed-configure.log"
   "$ninja" -C "$consumer_build" >"$work/installed-build.log"
   # bspc ran from the prefix, not from bspf's build.
-  "$ninja" -C "$consumer_build" -t commands levels | grep -q "&& $prefix/bin/bspc " ||
+  # Captured first: under pipefail, `ninja | grep -q` fails whenever grep
+  # quits before ninja has written everything (ninja then dies of SIGPIPE).
+  level_commands=$("$ninja" -C "$consumer_build" -t commands levels)
+  grep -q "&& $prefix/bin/bspc " <<<"$level_commands" ||
     fail "the levels were not compiled by the installed bspc"
   "$consumer_build/consumer" "$consumer_build/levels/box_room.bspf"
   "$prefix/bin/bspc" --info "$consumer_build/levels/slopes.bspf" >/dev/null
@@ -125,7 +128,8 @@ subproject)
   consumer_compile=$(grep -- '-c [^ ]*consumer.cpp' <<<"$commands") || fail "no compile of consumer.cpp"
   ! grep -q -- '-Wall' <<<"$consumer_compile" || fail "warnings flags reached the parent: $consumer_compile"
   grep -q -- '-std=[a-z+]*20' <<<"$consumer_compile" || fail "no C++20 from bspf::runtime: $consumer_compile"
-  grep -- '-c [^ ]*world.cpp' <<<"$commands" | grep -q -- '-Wall' || fail "bspf's own files lost their warnings"
+  grep -- '-c [^ ]*world.cpp' <<<"$commands" | grep -- '-Wall' >/dev/null ||
+    fail "bspf's own files lost their warnings"
   "$bspc" --quiet "$src/samples/box_room.obj" -o "$out/box_room.bspf"
   "$out/consumer" "$out/box_room.bspf"
   echo "ok: subproject built the runtime and the consumer only ($built)"

@@ -345,7 +345,7 @@ TEST_CASE(
   const float pad = 0.5f;
   std::uint64_t expectedQueries = 0;
   Vec3 queriedLow = Vec3::Zero(), queriedHigh = Vec3::Zero();
-  int reused = 0;
+  int reused = 0, touching = 0, onlyBoxNear = 0;
   for (int frame = 0; frame < 2000; ++frame) {
     // A random walk, with steps of every direction, small and large.
     const Vec3 before = centre;
@@ -370,13 +370,76 @@ TEST_CASE(
     for (const bspf::CandidateTriangle& c : nearby.list()) isListed[c.triangle] = 1;
     for (std::uint32_t t = 0; t < world.triangles().size(); ++t) {
       if (!overlaps(triangleBox(world, t), low, high, 0)) continue;
+      // Only a triangle with a point in the box must be listed: one whose
+      // box alone reaches it may lie beyond a split plane the query never
+      // crosses.
+      const auto& tri = world.triangles()[t];
+      if (!bspf::test::triangleTouchesBox(corner(world, tri.v0()), corner(world, tri.v1()),
+                                          corner(world, tri.v2()), low.cast<double>(),
+                                          high.cast<double>())) {
+        ++onlyBoxNear;
+        continue;
+      }
+      ++touching;
       INFO("frame " << frame << ", triangle " << t);
       REQUIRE(isListed[t]);
     }
   }
-  // Both paths taken many times.
+  // Both paths taken many times, with work for the judge.
   REQUIRE(reused > 300);
   REQUIRE(expectedQueries > 200);
+  REQUIRE(touching > 2000);
+  REQUIRE(onlyBoxNear > 100);
+}
+
+TEST_CASE("the triangle-box judge tells a triangle in a box from one only its box reaches",
+          "[runtime][query]") {
+  using V = Eigen::Vector3d;
+  const V low(0, 0, 0), high(1, 1, 1);
+  // Through the box, and touching its top face from above.
+  REQUIRE(bspf::test::triangleTouchesBox(V(-1, 0.5, -1), V(2, 0.5, -1), V(0.5, 0.5, 2), low, high));
+  REQUIRE(bspf::test::triangleTouchesBox(V(-1, 1, -1), V(2, 1, -1), V(0.5, 1, 2), low, high));
+  // Just above the top face.
+  REQUIRE_FALSE(
+      bspf::test::triangleTouchesBox(V(-1, 1.01, -1), V(2, 1.01, -1), V(0.5, 1.01, 2), low, high));
+  // Cutting past the corner (1, 1, 1) diagonally: its box holds the whole
+  // box, the plane x + y + z = 3.3 misses it; the same at 2.9 cuts it.
+  const auto diagonal = [&](double d) {
+    return bspf::test::triangleTouchesBox(V(d, 0, 0), V(0, d, 0), V(0, 0, d), low, high);
+  };
+  REQUIRE_FALSE(diagonal(3.3));
+  REQUIRE(diagonal(2.9));
+  // Random triangles and boxes against clipping the triangle by the box's
+  // six planes: the judge agrees with whether anything is left.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 2);
+  int touching = 0;
+  for (int k = 0; k < 20000; ++k) {
+    std::vector<V> polygon = {V(u(rng), u(rng), u(rng)), V(u(rng), u(rng), u(rng)),
+                              V(u(rng), u(rng), u(rng))};
+    const bool judged =
+        bspf::test::triangleTouchesBox(polygon[0], polygon[1], polygon[2], low, high);
+    for (int axis = 0; axis < 3 && !polygon.empty(); ++axis)
+      for (const double sign : {1.0, -1.0}) {
+        // Keeps sign * (p[axis] - bound) <= 0.
+        const double bound = sign > 0 ? high[axis] : low[axis];
+        std::vector<V> kept;
+        for (std::size_t i = 0; i < polygon.size(); ++i) {
+          const V& p = polygon[i];
+          const V& q = polygon[(i + 1) % polygon.size()];
+          const double dp = sign * (p[axis] - bound), dq = sign * (q[axis] - bound);
+          if (dp <= 0) kept.push_back(p);
+          if ((dp < 0 && dq > 0) || (dp > 0 && dq < 0))
+            kept.push_back(p + (q - p) * (dp / (dp - dq)));
+        }
+        polygon = kept;
+      }
+    INFO("case " << k);
+    REQUIRE(judged == !polygon.empty());
+    touching += judged;
+  }
+  REQUIRE(touching > 2000);
+  REQUIRE(touching < 18000);
 }
 
 TEST_CASE("the gather's stored-box test agrees with the plain overlap test, touching included",

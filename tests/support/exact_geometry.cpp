@@ -65,4 +65,28 @@ bool sweptEllipsoidTouchesTriangle(const V& from, const V& to, EllipsoidRadii ra
   return segmentTriangleDistance2(unit(from), unit(to), unit(a), unit(b), unit(c)) <= 1.0;
 }
 
+bool triangleTouchesBox(const V& a, const V& b, const V& c, const V& low, const V& high) {
+  // In the box's frame: centred on it, so its extent along an axis is
+  // |axis| . half.
+  const V centre = 0.5 * (low + high), half = 0.5 * (high - low);
+  const V corners[3] = {a - centre, b - centre, c - centre};
+  const auto separates = [&](const V& axis) {
+    double lowest = corners[0].dot(axis), highest = lowest;
+    for (const V& p : {corners[1], corners[2]}) {
+      lowest = std::min(lowest, p.dot(axis));
+      highest = std::max(highest, p.dot(axis));
+    }
+    const double reach = axis.cwiseAbs().dot(half);
+    return lowest > reach || highest < -reach;
+  };
+  const V edges[3] = {b - a, c - b, a - c};
+  if (separates(edges[0].cross(edges[1]))) return false;
+  for (int k = 0; k < 3; ++k) {
+    if (separates(V::Unit(k))) return false;
+    for (const V& edge : edges)
+      if (separates(V::Unit(k).cross(edge))) return false;
+  }
+  return true;
+}
+
 }  // namespace bspf::test

@@ -29,4 +29,11 @@ bool sweptEllipsoidTouchesTriangle(const Eigen::Vector3d& from, const Eigen::Vec
                                    EllipsoidRadii radii, const Eigen::Vector3d& a,
                                    const Eigen::Vector3d& b, const Eigen::Vector3d& c);
 
+/// Whether triangle abc has a point in the box [low, high] (closed sets:
+/// touching counts). Separating axes: the box's three, the triangle's
+/// normal, and the nine cross products of their edges.
+bool triangleTouchesBox(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                        const Eigen::Vector3d& c, const Eigen::Vector3d& low,
+                        const Eigen::Vector3d& high);
+
 }  // namespace bspf::test

@@ -89,14 +89,16 @@ void collectBoxCandidates(const World& world, const Vec3& low, const Vec3& high,
 /// shared between threads.
 class NearbyTriangles {
  public:
-  /// Makes list() hold (at least) every triangle whose bounding box overlaps
-  /// [low, high] (metres). Queries the tree for [low, high] grown by `pad`
-  /// metres on every side only when [low, high] is not inside the box last
-  /// queried on this `world` (by World::id()), or when that box is more than
-  /// 4 * pad + 0.1 m larger along an axis (it would list too much).
-  /// `ahead`, metres: a query also reaches this much further along each
-  /// axis on the side it points to (where a moving body goes next).
-  /// Preconditions: finite, low <= high, pad >= 0.
+  /// Makes list() hold (at least) every triangle with a point in [low, high]
+  /// (metres), as collectBoxCandidates does: one whose bounding box reaches
+  /// the box but which has no point in it may be missing. Queries the tree
+  /// for [low, high] grown by `pad` metres on every side only when
+  /// [low, high] is not inside the box last queried on this `world` (by
+  /// World::id()), or when that box is more than 4 * pad + 0.1 m larger
+  /// along an axis (it would list too much). `ahead`, metres: a query also
+  /// reaches this much further along each axis on the side it points to
+  /// (where a moving body goes next). Preconditions: finite, low <= high,
+  /// pad >= 0.
   void cover(const World& world, const Vec3& low, const Vec3& high, float pad,
              SweepScratch& scratch, const Vec3& ahead = Vec3::Zero());
   /// Forgets the last query, so the next cover() queries again.
