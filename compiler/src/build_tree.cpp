@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <exception>
 #include <limits>
 #include <mutex>
@@ -103,20 +104,26 @@ struct Lists {
   std::size_t size() const { return order.size(); }
 };
 
-// The node's triangles as columns of doubles, for the split search: the
-// corners, the face normal, and each axis's lowest and highest corner. A
-// candidate is then counted in one pass over contiguous memory that the
-// compiler vectorises, with the same arithmetic, in the same order, as
-// partition: the counts, so the tree, are exactly partition's.
+// The node's triangles as columns of floats, for the split search: the
+// corners (relative to `origin`, near the node, so that float keeps them to
+// a small fraction of the on-plane tolerance), the face normal, and each
+// axis's lowest and highest corner. A candidate is then counted in one pass
+// over contiguous memory, four triangles at a time. The counts only guide
+// the choice of a split: partition classifies in double, from the mesh,
+// and a split that leaves every triangle on one side there is refused
+// (buildNode). Float halves the memory the counting reads and doubles the
+// triangles an SSE instruction takes.
 struct Columns {
-  std::vector<double> corner[3][3];  // [corner][axis]
-  std::vector<double> normal[3];
-  std::vector<double> low[3], high[3];
+  std::vector<float> corner[3][3];  // [corner][axis]
+  std::vector<float> normal[3];
+  std::vector<float> low[3], high[3];
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   std::size_t size = 0;
 
   void gather(const std::vector<std::uint32_t>& triangles, const Mesh& mesh,
-              const std::vector<Eigen::Vector3d>& faceNormals) {
+              const std::vector<Eigen::Vector3d>& faceNormals, const Eigen::Vector3d& near) {
     size = triangles.size();
+    origin = near;
     // Only grown: a node smaller than an earlier one reuses the columns as they are.
     if (normal[0].size() < size) {
       for (auto& c : corner)
@@ -127,17 +134,35 @@ struct Columns {
         high[axis].resize(size);
       }
     }
+    float* cornerOut[3][3];
+    float *normalOut[3], *lowOut[3], *highOut[3];
+    for (int axis = 0; axis < 3; ++axis) {
+      for (int k = 0; k < 3; ++k) cornerOut[k][axis] = corner[k][axis].data();
+      normalOut[axis] = normal[axis].data();
+      lowOut[axis] = low[axis].data();
+      highOut[axis] = high[axis].data();
+    }
+    const double originAt[3] = {origin.x(), origin.y(), origin.z()};
     for (std::size_t i = 0; i < size; ++i) {
       const std::uint32_t t = triangles[i];
-      for (int k = 0; k < 3; ++k) {
-        const Eigen::Vector3d& v = mesh.vertices[mesh.triangles[t][k]];
-        for (int axis = 0; axis < 3; ++axis) corner[k][axis][i] = v[axis];
-      }
-      for (int axis = 0; axis < 3; ++axis) {
-        normal[axis][i] = faceNormals[t][axis];
-        low[axis][i] = std::min({corner[0][axis][i], corner[1][axis][i], corner[2][axis][i]});
-        high[axis][i] = std::max({corner[0][axis][i], corner[1][axis][i], corner[2][axis][i]});
-      }
+      const std::array<std::uint32_t, 3>& corners = mesh.triangles[t];
+      const double* at[3] = {mesh.vertices[corners[0]].data(), mesh.vertices[corners[1]].data(),
+                             mesh.vertices[corners[2]].data()};
+      const double* facing = faceNormals[t].data();
+      const auto fill = [&](int axis) {
+        const auto a = static_cast<float>(at[0][axis] - originAt[axis]);
+        const auto b = static_cast<float>(at[1][axis] - originAt[axis]);
+        const auto c = static_cast<float>(at[2][axis] - originAt[axis]);
+        cornerOut[0][axis][i] = a;
+        cornerOut[1][axis][i] = b;
+        cornerOut[2][axis][i] = c;
+        normalOut[axis][i] = static_cast<float>(facing[axis]);
+        lowOut[axis][i] = std::min(std::min(a, b), c);
+        highOut[axis][i] = std::max(std::max(a, b), c);
+      };
+      fill(0);
+      fill(1);
+      fill(2);
     }
   }
 };
@@ -146,11 +171,11 @@ struct Counts {
   std::size_t front = 0, back = 0, both = 0;
 };
 
-// Tallies partition's answers from each triangle's lowest and highest signed
+// Tallies partition's rule from each triangle's lowest and highest signed
 // distance and, for one lying in the plane, the side its normal faces.
 struct Tally {
   std::size_t front = 0, back = 0, both = 0;
-  void add(double lowest, double highest, double facing, double tolerance) {
+  void add(float lowest, float highest, float facing, float tolerance) {
     const bool inPlane = highest <= tolerance && lowest >= -tolerance;
     const bool reachesFront = inPlane ? facing >= 0 : highest > -tolerance;
     const bool reachesBack = inPlane ? facing < 0 : lowest < tolerance;
@@ -161,55 +186,55 @@ struct Tally {
 };
 
 #ifdef __SSE2__
-// Tally on two triangles at once: the same decisions, lane by lane.
+// Tally on four triangles at once: the same decisions, lane by lane.
 struct TallySse2 {
-  __m128d above, below, zero = _mm_setzero_pd();
+  __m128 above, below, zero = _mm_setzero_ps();
   __m128i front = _mm_setzero_si128(), back = _mm_setzero_si128(), both = _mm_setzero_si128();
-  explicit TallySse2(double tolerance)
-      : above(_mm_set1_pd(tolerance)), below(_mm_set1_pd(-tolerance)) {}
-  void add(__m128d lowest, __m128d highest, __m128d facing) {
-    const __m128d inPlane = _mm_and_pd(_mm_cmple_pd(highest, above), _mm_cmpge_pd(lowest, below));
-    const __m128d facesFront = _mm_cmpge_pd(facing, zero);
-    const __m128d reachesFront = _mm_or_pd(_mm_and_pd(inPlane, facesFront),
-                                           _mm_andnot_pd(inPlane, _mm_cmpgt_pd(highest, below)));
-    const __m128d reachesBack = _mm_or_pd(_mm_andnot_pd(facesFront, inPlane),
-                                          _mm_andnot_pd(inPlane, _mm_cmplt_pd(lowest, above)));
+  explicit TallySse2(float tolerance)
+      : above(_mm_set1_ps(tolerance)), below(_mm_set1_ps(-tolerance)) {}
+  void add(__m128 lowest, __m128 highest, __m128 facing) {
+    const __m128 inPlane = _mm_and_ps(_mm_cmple_ps(highest, above), _mm_cmpge_ps(lowest, below));
+    const __m128 facesFront = _mm_cmpge_ps(facing, zero);
+    const __m128 reachesFront = _mm_or_ps(_mm_and_ps(inPlane, facesFront),
+                                          _mm_andnot_ps(inPlane, _mm_cmpgt_ps(highest, below)));
+    const __m128 reachesBack = _mm_or_ps(_mm_andnot_ps(facesFront, inPlane),
+                                         _mm_andnot_ps(inPlane, _mm_cmplt_ps(lowest, above)));
     // A mask lane is all ones, -1 as an integer: subtracting counts it.
-    front = _mm_sub_epi64(front, _mm_castpd_si128(_mm_andnot_pd(reachesBack, reachesFront)));
-    back = _mm_sub_epi64(back, _mm_castpd_si128(_mm_andnot_pd(reachesFront, reachesBack)));
-    both = _mm_sub_epi64(both, _mm_castpd_si128(_mm_and_pd(reachesFront, reachesBack)));
+    front = _mm_sub_epi32(front, _mm_castps_si128(_mm_andnot_ps(reachesBack, reachesFront)));
+    back = _mm_sub_epi32(back, _mm_castps_si128(_mm_andnot_ps(reachesFront, reachesBack)));
+    both = _mm_sub_epi32(both, _mm_castps_si128(_mm_and_ps(reachesFront, reachesBack)));
   }
   static std::size_t sum(__m128i v) {
-    std::uint64_t lanes[2];
+    std::uint32_t lanes[4];
     _mm_storeu_si128(reinterpret_cast<__m128i*>(lanes), v);
-    return std::size_t(lanes[0] + lanes[1]);
+    return std::size_t(lanes[0]) + lanes[1] + lanes[2] + lanes[3];
   }
   Counts counts() const { return {sum(front), sum(back), sum(both)}; }
 };
 #endif
 
-// partition's answers, counted, for triangles [begin, end) of `c` against an axis-aligned split
-// (normal the axis, or its opposite when `flipped`): the normal's dot
-// product with a corner is the corner's coordinate (negated) exactly, and
-// rounding is monotonic, so the lowest signed distance is the lowest
-// coordinate (the highest, negated) less the distance: countSplit's counts.
+// partition's rule, counted, for triangles [begin, end) of `c` against an
+// axis-aligned split (normal the axis, or its opposite when `flipped`;
+// `distance` from the columns' origin): the normal's dot product with a
+// corner is the corner's coordinate (negated), so the lowest signed distance
+// is the lowest coordinate (the highest, negated) less the distance.
 Counts countAxisSplit(const Columns& c, std::size_t begin, std::size_t end, int axis, bool flipped,
-                      double distance, double tolerance) {
-  const double *low = c.low[axis].data(), *high = c.high[axis].data(),
-               *normal = c.normal[axis].data();
+                      float distance, float tolerance) {
+  const float *low = c.low[axis].data(), *high = c.high[axis].data(),
+              *normal = c.normal[axis].data();
   if (flipped) std::swap(low, high);
-  const double sign = flipped ? -1.0 : 1.0;
+  const float sign = flipped ? -1.0f : 1.0f;
   std::size_t i = begin;
   Counts counts;
 #ifdef __SSE2__
   TallySse2 lanes(tolerance);
-  const __m128d vd = _mm_set1_pd(distance);
+  const __m128 vd = _mm_set1_ps(distance);
   // Negation flips the sign bit, exactly.
-  const __m128d flip = _mm_set1_pd(flipped ? -0.0 : 0.0);
-  for (; i + 2 <= end; i += 2)
-    lanes.add(_mm_sub_pd(_mm_xor_pd(_mm_loadu_pd(low + i), flip), vd),
-              _mm_sub_pd(_mm_xor_pd(_mm_loadu_pd(high + i), flip), vd),
-              _mm_xor_pd(_mm_loadu_pd(normal + i), flip));
+  const __m128 flip = _mm_set1_ps(flipped ? -0.0f : 0.0f);
+  for (; i + 4 <= end; i += 4)
+    lanes.add(_mm_sub_ps(_mm_xor_ps(_mm_loadu_ps(low + i), flip), vd),
+              _mm_sub_ps(_mm_xor_ps(_mm_loadu_ps(high + i), flip), vd),
+              _mm_xor_ps(_mm_loadu_ps(normal + i), flip));
   counts = lanes.counts();
 #endif
   Tally tally;
@@ -218,48 +243,48 @@ Counts countAxisSplit(const Columns& c, std::size_t begin, std::size_t end, int 
   return {counts.front + tally.front, counts.back + tally.back, counts.both + tally.both};
 }
 
-// partition's answers, counted, for triangles [begin, end) of `c` against any split. Two at a
-// time with SSE2 where there is SSE2: the same operations in the same
-// order on each lane, so the same counts.
-Counts countSplit(const Columns& c, std::size_t begin, std::size_t end, const Eigen::Vector3d& n,
-                  double distance, double tolerance) {
-  const double nx = n.x(), ny = n.y(), nz = n.z();
+// partition's rule, counted, for triangles [begin, end) of `c` against any
+// split (`distance` from the columns' origin). Four at a time with SSE2
+// where there is SSE2.
+Counts countSplit(const Columns& c, std::size_t begin, std::size_t end, const Eigen::Vector3f& n,
+                  float distance, float tolerance) {
+  const float nx = n.x(), ny = n.y(), nz = n.z();
   std::size_t i = begin;
   Counts counts;
 #ifdef __SSE2__
-  const __m128d vx = _mm_set1_pd(nx), vy = _mm_set1_pd(ny), vz = _mm_set1_pd(nz),
-                vd = _mm_set1_pd(distance);
+  const __m128 vx = _mm_set1_ps(nx), vy = _mm_set1_ps(ny), vz = _mm_set1_ps(nz),
+               vd = _mm_set1_ps(distance);
   TallySse2 lanes(tolerance);
-  for (; i + 2 <= end; i += 2) {
-    __m128d lowest = _mm_set1_pd(std::numeric_limits<double>::infinity());
-    __m128d highest = _mm_set1_pd(-std::numeric_limits<double>::infinity());
+  for (; i + 4 <= end; i += 4) {
+    __m128 lowest = _mm_set1_ps(std::numeric_limits<float>::infinity());
+    __m128 highest = _mm_set1_ps(-std::numeric_limits<float>::infinity());
     for (int k = 0; k < 3; ++k) {
-      const __m128d s =
-          _mm_sub_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(vx, _mm_loadu_pd(&c.corner[k][0][i])),
-                                           _mm_mul_pd(vy, _mm_loadu_pd(&c.corner[k][1][i]))),
-                                _mm_mul_pd(vz, _mm_loadu_pd(&c.corner[k][2][i]))),
+      const __m128 s =
+          _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(vx, _mm_loadu_ps(&c.corner[k][0][i])),
+                                           _mm_mul_ps(vy, _mm_loadu_ps(&c.corner[k][1][i]))),
+                                _mm_mul_ps(vz, _mm_loadu_ps(&c.corner[k][2][i]))),
                      vd);
-      lowest = _mm_min_pd(lowest, s);
-      highest = _mm_max_pd(highest, s);
+      lowest = _mm_min_ps(lowest, s);
+      highest = _mm_max_ps(highest, s);
     }
-    const __m128d facing = _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_loadu_pd(&c.normal[0][i]), vx),
-                                                 _mm_mul_pd(_mm_loadu_pd(&c.normal[1][i]), vy)),
-                                      _mm_mul_pd(_mm_loadu_pd(&c.normal[2][i]), vz));
+    const __m128 facing = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(&c.normal[0][i]), vx),
+                                                _mm_mul_ps(_mm_loadu_ps(&c.normal[1][i]), vy)),
+                                     _mm_mul_ps(_mm_loadu_ps(&c.normal[2][i]), vz));
     lanes.add(lowest, highest, facing);
   }
   counts = lanes.counts();
 #endif
   Tally tally;
   for (; i < end; ++i) {
-    double lowest = std::numeric_limits<double>::infinity();
-    double highest = -lowest;
+    float lowest = std::numeric_limits<float>::infinity();
+    float highest = -lowest;
     for (int k = 0; k < 3; ++k) {
-      const double s =
+      const float s =
           (nx * c.corner[k][0][i] + ny * c.corner[k][1][i]) + nz * c.corner[k][2][i] - distance;
       lowest = std::min(lowest, s);
       highest = std::max(highest, s);
     }
-    const double facing = (c.normal[0][i] * nx + c.normal[1][i] * ny) + c.normal[2][i] * nz;
+    const float facing = (c.normal[0][i] * nx + c.normal[1][i] * ny) + c.normal[2][i] * nz;
     tally.add(lowest, highest, facing, tolerance);
   }
   return {counts.front + tally.front, counts.back + tally.back, counts.both + tally.both};
@@ -394,12 +419,11 @@ class TreeBuilder {
     if (triangles.size() > shareSize_ && triangles.size() > settings_.maxLeafTriangles &&
         depth < settings_.maxDepth)
       split = chooseSplit(triangles, cell, scratch_.front(), pool_);
-    if (!split) {
+    Lists front, back;
+    if (!split || !partition(triangles, *split, front, back, scratch_.front().side)) {
       subtrees_.push_back({std::move(triangles), cell, depth, share, {}, -1});
       return -static_cast<std::int32_t>(subtrees_.size());
     }
-    Lists front, back;
-    partition(triangles, *split, scratch_.front().columns, front, back, scratch_.front().side);
     const auto index = static_cast<std::int32_t>(top_.size());
     top_.push_back({*split});
     const double whole = double(front.size() + back.size());
@@ -435,51 +459,62 @@ class TreeBuilder {
   }
 
   // Splits `triangles` (emptied) into the two sides' lists, in their order;
-  // `columns` holds them (chooseSplit gathered it), `side` is working
-  // memory, one entry a mesh triangle. A triangle lying in the plane goes to the side its normal
-  // faces; a corner within the tolerance of a side counts as reaching it.
-  // The counts of countSplit and countAxisSplit are this rule's, exactly.
-  void partition(Lists& triangles, const Split& split, const Columns& columns, Lists& front,
-                 Lists& back, std::vector<std::uint8_t>& side) const {
+  // `side` is working memory, one entry a mesh triangle. A triangle lying in
+  // the plane goes to the side its normal faces; a corner within the
+  // tolerance of a side counts as reaching it. In double, from the mesh:
+  // a cell's lists are complete whatever float made of the counts. False,
+  // with `triangles` left as they were, when every triangle would reach one
+  // side: the split makes no progress (the float counts said it did, which
+  // only a triangle at the tolerance's edge can make them say).
+  bool partition(Lists& triangles, const Split& split, Lists& front, Lists& back,
+                 std::vector<std::uint8_t>& side) const {
     side.resize(mesh_.triangles.size());
     const double nx = split.normal.x(), ny = split.normal.y(), nz = split.normal.z();
     const double distance = split.distance, tolerance = onPlaneTolerance(split);
     std::size_t toFront = 0, toBack = 0;
-    for (std::size_t i = 0; i < columns.size; ++i) {
+    for (const std::uint32_t t : triangles.order) {
       double lowest = std::numeric_limits<double>::infinity();
       double highest = -lowest;
       for (int k = 0; k < 3; ++k) {
-        const double s = (nx * columns.corner[k][0][i] + ny * columns.corner[k][1][i]) +
-                         nz * columns.corner[k][2][i] - distance;
+        const Eigen::Vector3d& v = mesh_.vertices[mesh_.triangles[t][k]];
+        const double s = (nx * v.x() + ny * v.y()) + nz * v.z() - distance;
         lowest = std::min(lowest, s);
         highest = std::max(highest, s);
       }
-      const double facing =
-          (columns.normal[0][i] * nx + columns.normal[1][i] * ny) + columns.normal[2][i] * nz;
+      const Eigen::Vector3d& normal = faceNormals_[t];
+      const double facing = (normal.x() * nx + normal.y() * ny) + normal.z() * nz;
       const bool inPlane = highest <= tolerance && lowest >= -tolerance;
       const bool reachesFront = inPlane ? facing >= 0 : highest > -tolerance;
       const bool reachesBack = inPlane ? facing < 0 : lowest < tolerance;
-      side[triangles.order[i]] =
-          std::uint8_t((reachesFront ? kFront : 0) | (reachesBack ? kBack : 0));
+      side[t] = std::uint8_t((reachesFront ? kFront : 0) | (reachesBack ? kBack : 0));
       toFront += reachesFront;
       toBack += reachesBack;
     }
+    if (toFront == triangles.size() || toBack == triangles.size()) return false;
     const auto share = [&](std::vector<std::uint32_t>& from,
                            std::vector<std::uint32_t>& toFrontList,
                            std::vector<std::uint32_t>& toBackList) {
       if (from.empty()) return;
-      toFrontList.reserve(toFront);
-      toBackList.reserve(toBack);
+      // One spare slot each: the write past a side's last kept entry.
+      toFrontList.resize(toFront + 1);
+      toBackList.resize(toBack + 1);
+      std::uint32_t *frontOut = toFrontList.data(), *backOut = toBackList.data();
+      // Written unconditionally, kept by the side's bit: no branch to mispredict.
       for (const std::uint32_t t : from) {
-        if (side[t] & kFront) toFrontList.push_back(t);
-        if (side[t] & kBack) toBackList.push_back(t);
+        *frontOut = t;
+        *backOut = t;
+        frontOut += side[t] & kFront;
+        backOut += (side[t] & kBack) >> 1;
       }
+      toFrontList.pop_back();
+      toBackList.pop_back();
       from.clear();
       from.shrink_to_fit();
     };
     share(triangles.order, front.order, back.order);
     for (int axis = 0; axis < 3; ++axis)
       share(triangles.byAxis[axis], front.byAxis[axis], back.byAxis[axis]);
+    return true;
   }
 
   // A candidate split and how to count it: against the column of `axis`
@@ -494,12 +529,36 @@ class TreeBuilder {
   // The candidates, in order, each plane once: a later copy of a plane
   // (many triangles of a wall sample the same one) has the same counts and
   // cells as the first, so it loses every tie to it and is never chosen.
-  void candidates(const Lists& lists, std::vector<Candidate>& out) const {
+  // `slots` is working memory for a hash set of the planes so far (a scan
+  // of them all was a tenth of the build).
+  void candidates(const Lists& lists, std::vector<Candidate>& out,
+                  std::vector<std::int32_t>& slots) const {
     out.clear();
+    // At most half full: fewer than twice triangleCandidates triangle planes
+    // (the stride rounds down) besides the axis planes.
+    std::size_t tableSize = 64;
+    while (tableSize < 2 * (3 * std::size_t(settings_.axisCandidatesPerAxis) +
+                            2 * std::size_t(settings_.triangleCandidates)))
+      tableSize *= 2;
+    slots.assign(tableSize, -1);
     const auto add = [&](const Split& split, int axis, bool flipped) {
-      for (const Candidate& c : out)
-        if (c.split.distance == split.distance && c.split.normal == split.normal) return;
-      out.push_back({split, axis, flipped});
+      // + 0.0f: -0 and +0, equal to ==, hash alike.
+      const float key[4] = {split.normal.x() + 0.0f, split.normal.y() + 0.0f,
+                            split.normal.z() + 0.0f, split.distance + 0.0f};
+      std::uint32_t bits[4];
+      std::memcpy(bits, key, sizeof bits);
+      std::uint64_t hash = 0;
+      for (const std::uint32_t b : bits) hash = (hash ^ b) * 0x9E3779B97F4A7C15ull;
+      for (std::size_t slot = std::size_t(hash >> 40) & (tableSize - 1);;
+           slot = (slot + 1) & (tableSize - 1)) {
+        if (slots[slot] < 0) {
+          slots[slot] = static_cast<std::int32_t>(out.size());
+          out.push_back({split, axis, flipped});
+          return;
+        }
+        const Split& c = out[std::size_t(slots[slot])].split;
+        if (c.distance == split.distance && c.normal == split.normal) return;
+      }
     };
     const auto n = lists.size();
     const std::vector<std::uint32_t>& triangles = lists.order;
@@ -538,8 +597,9 @@ class TreeBuilder {
     Columns columns, sampleColumns;
     std::vector<std::uint32_t> sample;
     std::vector<std::uint8_t> side;
+    std::vector<std::int32_t> slots;
     std::vector<Candidate> candidates, shortlist;
-    std::vector<std::pair<double, std::size_t>> estimates;  // score, candidate
+    std::vector<std::pair<double, std::size_t>> estimates, ranked;  // score, candidate
     struct Counted {
       Split split;
       double frontTotal, backTotal, score;
@@ -563,12 +623,12 @@ class TreeBuilder {
         const std::size_t begin = b * kBlock, end = std::min(n, begin + kBlock);
         for (std::size_t i = 0; i < m; ++i) {
           const auto& [split, axis, flipped] = candidates[i];
-          const double tolerance = onPlaneTolerance(split);
+          const auto tolerance = static_cast<float>(onPlaneTolerance(split));
+          const auto distance = static_cast<float>(double(split.distance) -
+                                                   split.normal.cast<double>().dot(columns.origin));
           scratch.blockCounts[b * m + i] =
-              axis >= 0
-                  ? countAxisSplit(columns, begin, end, axis, flipped, split.distance, tolerance)
-                  : countSplit(columns, begin, end, split.normal.cast<double>(), split.distance,
-                               tolerance);
+              axis >= 0 ? countAxisSplit(columns, begin, end, axis, flipped, distance, tolerance)
+                        : countSplit(columns, begin, end, split.normal, distance, tolerance);
         }
       }
     });
@@ -608,12 +668,13 @@ class TreeBuilder {
   std::optional<Split> chooseSplit(const Lists& lists, const Box& cell, Scratch& scratch,
                                    bspf::ThreadPool* pool) const {
     const std::size_t n = lists.size();
-    candidates(lists, scratch.candidates);
-    scratch.columns.gather(lists.order, mesh_, faceNormals_);
+    candidates(lists, scratch.candidates, scratch.slots);
+    const Eigen::Vector3d middle = (cell.low + cell.high) / 2;
+    scratch.columns.gather(lists.order, mesh_, faceNormals_, middle);
     if (n > kSampledAbove && scratch.candidates.size() > kShortlist) {
       scratch.sample.resize(kSample);
       for (std::size_t i = 0; i < kSample; ++i) scratch.sample[i] = lists.order[i * n / kSample];
-      scratch.sampleColumns.gather(scratch.sample, mesh_, faceNormals_);
+      scratch.sampleColumns.gather(scratch.sample, mesh_, faceNormals_, middle);
       countAll(scratch.candidates, scratch.sampleColumns, scratch, nullptr, scratch.counts);
       scratch.estimates.clear();
       for (std::size_t i = 0; i < scratch.candidates.size(); ++i)
@@ -649,11 +710,15 @@ class TreeBuilder {
     // The lowest score that pays, the earliest candidate of equal scores:
     // candidates in that order, the first that pays. Its cells are clipped
     // only when asked, as most candidates never are.
-    std::stable_sort(scratch.counted.begin(), scratch.counted.end(),
-                     [](const auto& a, const auto& b) { return a.score < b.score; });
+    // Ranks sorted, not the candidates, whose cells make them large to move.
+    scratch.ranked.clear();
+    for (std::size_t i = 0; i < scratch.counted.size(); ++i)
+      scratch.ranked.push_back({scratch.counted[i].score, i});
+    std::sort(scratch.ranked.begin(), scratch.ranked.end());
     auto best = [&](double reach) -> std::optional<Split> {
       const double whole = cell.reachVolume(reach);
-      for (auto& c : scratch.counted) {
+      for (const auto& [score, i] : scratch.ranked) {
+        auto& c = scratch.counted[i];
         if (!c.cells) c.cells = {cell.clipped(c.split, true), cell.clipped(c.split, false)};
         const double cost = 1.0 + (c.cells->first.reachVolume(reach) * c.frontTotal +
                                    c.cells->second.reachVolume(reach) * c.backTotal) /
@@ -699,10 +764,9 @@ class TreeBuilder {
     if (triangles.size() <= settings_.maxLeafTriangles || depth >= settings_.maxDepth)
       return makeLeaf(triangles, depth, share, tree);
     const std::optional<Split> split = chooseSplit(triangles, cell, scratch, nullptr);
-    if (!split) return makeLeaf(triangles, depth, share, tree);
-
     Lists front, back;
-    partition(triangles, *split, scratch.columns, front, back, scratch.side);
+    if (!split || !partition(triangles, *split, front, back, scratch.side))
+      return makeLeaf(triangles, depth, share, tree);
     const double whole = double(front.size() + back.size());
     const double frontShare = share * double(front.size()) / whole;
     const double backShare = share * double(back.size()) / whole;
@@ -719,7 +783,7 @@ class TreeBuilder {
 
   static constexpr double kProgressUnits = 1e9;
   // Triangles counted against all candidates at a time: their columns
-  // (21 doubles each) stay in the first-level cache.
+  // (21 floats each) stay in the first-level cache.
   static constexpr std::size_t kBlock = 256;
   // The sampled split search (chooseSplit).
   // Measured on the shared levels (docs/measurements.md): a sample of 64
