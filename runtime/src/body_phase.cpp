@@ -409,11 +409,16 @@ void BodyGrid::build(std::span<const Body> bodies) {
                ? bodies[i].position
                : Vec3(movers_[i].start + stops_[i].time * movers_[i].move);
   };
-  if (n <= std::size_t(kSortedNeighbourBodies)) {
+  // A crowd the sorting turned back (a dense one, most often) is not sorted
+  // again for a while: the sorting's cost would be lost each frame. Either
+  // way the pairs are the same, so this history changes no push.
+  if (n <= std::size_t(kSortedNeighbourBodies) && buildsUntilSortingAgain_-- <= 0) {
+    buildsUntilSortingAgain_ = 0;
     entries_.resize(n);
     for (std::size_t i = 0; i < n; ++i) entries_[i] = {endOf(i), bodies[i].radii, std::uint32_t(i)};
     sortedNeighbours_ = findNeighboursBySorting(width);
     if (sortedNeighbours_) return;
+    buildsUntilSortingAgain_ = kBuildsBeforeSortingAgain;
   }
   sortedNeighbours_ = false;
   // At most half full, so a look-up probes few slots.

@@ -499,6 +499,10 @@ class BodyGrid {
   /// The last build found the pairs by sorting (findNeighboursBySorting):
   /// entries_ are by body index, places_ and the cells unused.
   bool sortedNeighbours_ = false;
+  /// Builds left before a crowd that findNeighboursBySorting turned back is
+  /// sorted again (the grid's work meanwhile: the same pairs).
+  int buildsUntilSortingAgain_ = 0;
+  static constexpr int kBuildsBeforeSortingAgain = 30;
   /// The centres' x (ordered bits) << 32 | body, sorted; kept from the last
   /// build, whose order is nearly this build's.
   std::vector<std::uint64_t> xOrder_;
