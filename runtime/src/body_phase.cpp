@@ -2,7 +2,8 @@
 // The body-against-body phase of stepBodies: a sweep of the fast bodies'
 // moves against the bodies near their paths (each stopped where it first
 // meets another), a hashed grid of the bodies' positions after the level
-// phase and the sweep, then, for each body independently, the sum of the
+// phase and the sweep (for a small crowd, the pairs its cells would give,
+// found by sorting along x), then, for each body independently, the sum of the
 // pushes from its nearest overlapping bodies (no longer than the largest of
 // them), applied as one move against the level: a slide only when the move
 // comes near a triangle.
@@ -129,9 +130,12 @@ constexpr std::array<std::array<std::uint64_t, 7>, 8> kNeighbourOffsets = [] {
 // correct, as every pair found is tested for overlap. (std::floor is a
 // library call here; offset into positive doubles, exactly, truncation is
 // the floor.)
+float clampToCells(float scaled) {
+  const float s = scaled > -kCellLimit ? scaled : -kCellLimit;  // also NaN
+  return s < kCellLimit ? s : kCellLimit;
+}
 std::uint64_t cellCoordinate(float scaled, bool& upperHalf) {
-  float s = scaled > -kCellLimit ? scaled : -kCellLimit;  // also NaN
-  s = s < kCellLimit ? s : kCellLimit;
+  const float s = clampToCells(scaled);
   const double offset = double(s) + double(kCellOffset);
   const std::int64_t cell = std::int64_t(offset);
   upperHalf = offset - double(cell) >= 0.5;
@@ -405,6 +409,18 @@ void BodyGrid::build(std::span<const Body> bodies) {
                ? bodies[i].position
                : Vec3(movers_[i].start + stops_[i].time * movers_[i].move);
   };
+  // A crowd the sorting turned back (a dense one, most often) is not sorted
+  // again for a while: the sorting's cost would be lost each frame. Either
+  // way the pairs are the same, so this history changes no push.
+  if (n <= std::size_t(kSortedNeighbourBodies) && buildsUntilSortingAgain_-- <= 0) {
+    buildsUntilSortingAgain_ = 0;
+    entries_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) entries_[i] = {endOf(i), bodies[i].radii, std::uint32_t(i)};
+    sortedNeighbours_ = findNeighboursBySorting(width);
+    if (sortedNeighbours_) return;
+    buildsUntilSortingAgain_ = kBuildsBeforeSortingAgain;
+  }
+  sortedNeighbours_ = false;
   // At most half full, so a look-up probes few slots.
   std::size_t size = 16;
   shift_ = 60;
@@ -467,6 +483,123 @@ void BodyGrid::build(std::span<const Body> bodies) {
       occupied_[place.bit >> 6] |= std::uint64_t(1) << (place.bit & 63);
     }
   }
+}
+
+namespace {
+
+// A body's grid cell (offset coordinates, as BodyGrid::build files it) and
+// its upper-half bits.
+struct GridCell {
+  std::array<std::uint64_t, 3> coordinates;
+  unsigned upperHalf;
+};
+
+}  // namespace
+
+bool BodyGrid::findNeighboursBySorting(float width) {
+  const std::uint32_t n = std::uint32_t(entries_.size());
+  if (xOrder_.size() != n) {
+    xOrder_.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) xOrder_[i] = i;
+  }
+  for (std::uint64_t& key : xOrder_) {
+    const std::uint32_t i = std::uint32_t(key);
+    const Entry& e = entries_[i];
+    // The scan below needs x in order and every pair's reach at most half a
+    // cell (the width's std::max passed over a NaN radius).
+    if (!(std::abs(e.position.x()) <= std::numeric_limits<float>::max()) || std::isnan(e.radii.xz))
+      return false;
+    // A float's bits, sign-flipped, order as the float does.
+    const std::uint32_t bits = std::bit_cast<std::uint32_t>(e.position.x());
+    key = std::uint64_t(bits >> 31 ? ~bits : bits | 0x80000000u) << 32 | i;
+  }
+  // Insertion sort: the bodies moved a little since the last build, so the
+  // last order is nearly this one (a few swaps, not a sort's n log n).
+  for (std::uint32_t k = 1; k < n; ++k) {
+    const std::uint64_t key = xOrder_[k];
+    std::uint32_t at = k;
+    for (; at > 0 && xOrder_[at - 1] > key; --at) xOrder_[at] = xOrder_[at - 1];
+    xOrder_[at] = key;
+  }
+  // The grid examines at most kMaxBodyCandidates bodies of a body's 8 cells,
+  // in an order of its own: with more there, which pushers it finds depends
+  // on that order, so the grid must find them. Those cells lie within 2 cells
+  // of the body along x (in the clamped coordinates cells are cut from), so
+  // 34 bodies (it and 33 others) would lie within 4 cells of each other
+  // along x, consecutive in x order.
+  constexpr std::uint32_t kRun = kMaxBodyCandidates + 2;
+  if (n >= kRun) {
+    auto scaled = [&](std::uint64_t key) {
+      return clampToCells(entries_[std::uint32_t(key)].position.x() * inverseWidth_);
+    };
+    for (std::uint32_t k = 0; k + kRun <= n; ++k)
+      if (!(scaled(xOrder_[k + kRun - 1]) - scaled(xOrder_[k]) > 4)) return false;
+  }
+
+  // Each pair less than half a cell apart along x (no pair reaches further:
+  // cells are twice the widest body), kept, each way, when its boxes overlap
+  // (the push's own first test, as it makes it) and the grid would examine
+  // it: the other body lies in one of this one's 8 cells. It does when the
+  // two lie less than half a cell apart along each axis in the coordinates
+  // cells are cut from (whichever half of its cell a body lies in, the
+  // neighbour on that side holds all within half a cell): the common case,
+  // tested before the cells themselves.
+  const Vec3 inverse(inverseWidth_, inverseHeight_, inverseWidth_);
+  auto withinHalfCell = [&](const Vec3& p, const Vec3& q) {
+    for (int axis = 0; axis < 3; ++axis)
+      if (!(std::abs(clampToCells(p[axis] * inverse[axis]) -
+                     clampToCells(q[axis] * inverse[axis])) < 0.5f))
+        return false;
+    return true;
+  };
+  auto cellOf = [&](const Vec3& p) {
+    GridCell c;
+    bool upper[3];
+    c.coordinates = {cellCoordinate(p.x() * inverseWidth_, upper[0]),
+                     cellCoordinate(p.y() * inverseHeight_, upper[1]),
+                     cellCoordinate(p.z() * inverseWidth_, upper[2])};
+    c.upperHalf = unsigned(upper[0]) | unsigned(upper[1]) << 1 | unsigned(upper[2]) << 2;
+    return c;
+  };
+  auto examines = [](const GridCell& self, const GridCell& other) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::uint64_t own = self.coordinates[axis],
+                          beside = self.upperHalf >> axis & 1 ? own + 1 : own - 1;
+      if (other.coordinates[axis] != own && other.coordinates[axis] != beside) return false;
+    }
+    return true;
+  };
+  nearHead_.assign(n, kNoNeighbour);
+  nearLinks_.clear();
+  auto link = [&](std::uint32_t self, std::uint32_t other) {
+    nearLinks_.push_back({other, nearHead_[self]});
+    nearHead_[self] = std::uint32_t(nearLinks_.size() - 1);
+  };
+  const float reach = 0.5f * width;
+  for (std::uint32_t k = 0; k < n; ++k) {
+    const std::uint32_t a = std::uint32_t(xOrder_[k]);
+    const Entry& p = entries_[a];
+    for (std::uint32_t l = k + 1; l < n; ++l) {
+      const std::uint32_t b = std::uint32_t(xOrder_[l]);
+      const Entry& q = entries_[b];
+      if (!(q.position.x() - p.position.x() < reach)) break;
+      const float ax = p.position.x() - q.position.x(), ay = p.position.y() - q.position.y(),
+                  az = p.position.z() - q.position.z();
+      const float reachXZ = p.radii.xz + q.radii.xz;
+      if (std::abs(ax) >= reachXZ || std::abs(az) >= reachXZ ||
+          std::abs(ay) >= p.radii.y + q.radii.y)
+        continue;
+      if (withinHalfCell(p.position, q.position)) {
+        link(a, b);
+        link(b, a);
+        continue;
+      }
+      const GridCell cellA = cellOf(p.position), cellB = cellOf(q.position);
+      if (examines(cellA, cellB)) link(a, b);
+      if (examines(cellB, cellA)) link(b, a);
+    }
+  }
+  return true;
 }
 
 void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> bodies,
@@ -552,10 +685,13 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
   if (grid.entries_.size() < 2) return;
   for (std::size_t i = first; i < last; ++i) {
     Body& body = bodies[i];
-    const BodyGrid::Entry& self = grid.entries_[grid.places_[i].entry];
+    const BodyGrid::Entry& self =
+        grid.entries_[grid.sortedNeighbours_ ? std::uint32_t(i) : grid.places_[i].entry];
     if (!grid.stops_.empty() && grid.stops_[i].time < 1)
       stopAtBody(world, body, self.position, grid.stops_[i].normal, scratch,
                  reports.empty() ? nullptr : &reports[i], caches[i]);
+    // Most bodies of a small crowd have no other near them.
+    if (grid.sortedNeighbours_ && grid.nearHead_[i] == BodyGrid::kNoNeighbour) continue;
     NearestPushers nearest;
     int examined = 0;
     auto examine = [&](const BodyGrid::Entry& other) {
@@ -584,37 +720,46 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
       if (overlap > 0) nearest.offer({other.body, apartKnown, Vec3(ax, ay, az), overlap});
     };
 
-    // Its own cell first, outwards from its own place (a cell's bodies sit
-    // in index order): in a pile larger than the candidate cap, each body
-    // meets the bodies nearest it in index order, not all the same few.
-    const BodyGrid::Place& place = grid.places_[i];
-    const BodyGrid::Cell& own = grid.cells_[place.cellSlot];
-    for (std::uint32_t step = 1; examined < kMaxBodyCandidates; ++step) {
-      const bool below = place.entry >= own.first + step,
-                 above = place.entry + step < own.first + own.count;
-      if (!below && !above) break;
-      if (below) examine(grid.entries_[place.entry - step]);
-      if (above && examined < kMaxBodyCandidates) examine(grid.entries_[place.entry + step]);
-    }
-    // Then the 7 other cells that may hold an overlapping body. Most are
-    // empty: their occupancy bits, when kept, spare those a hash look-up.
-    unsigned around = 0x7f;
-    if (!grid.occupied_.empty()) {
-      around = 0;
-      const std::array<std::uint32_t, 7>& offsets = grid.bitOffsets_[place.upperHalf];
-      const std::uint64_t* occupied = grid.occupied_.data();
-      for (int k = 0; k < 7; ++k) {
-        const std::uint32_t bit = place.bit + offsets[k];
-        around |= unsigned(occupied[bit >> 6] >> (bit & 63) & 1) << k;
+    if (grid.sortedNeighbours_) {
+      // The grid's candidates whose boxes overlap, found by sorting: no more
+      // than kMaxBodyCandidates, so examined in any order they give the
+      // same nearest pushers.
+      for (std::uint32_t link = grid.nearHead_[i]; link != BodyGrid::kNoNeighbour;
+           link = grid.nearLinks_[link].next)
+        examine(grid.entries_[grid.nearLinks_[link].body]);
+    } else {
+      // Its own cell first, outwards from its own place (a cell's bodies sit
+      // in index order): in a pile larger than the candidate cap, each body
+      // meets the bodies nearest it in index order, not all the same few.
+      const BodyGrid::Place& place = grid.places_[i];
+      const BodyGrid::Cell& own = grid.cells_[place.cellSlot];
+      for (std::uint32_t step = 1; examined < kMaxBodyCandidates; ++step) {
+        const bool below = place.entry >= own.first + step,
+                   above = place.entry + step < own.first + own.count;
+        if (!below && !above) break;
+        if (below) examine(grid.entries_[place.entry - step]);
+        if (above && examined < kMaxBodyCandidates) examine(grid.entries_[place.entry + step]);
       }
-    }
-    for (; around != 0 && examined < kMaxBodyCandidates; around &= around - 1) {
-      const int k = std::countr_zero(around);
-      const BodyGrid::Cell& cell =
-          grid.cells_[grid.find(place.key + kNeighbourOffsets[place.upperHalf][k])];
-      for (std::uint32_t e = cell.first, end = cell.first + cell.count;
-           e < end && examined < kMaxBodyCandidates; ++e)
-        examine(grid.entries_[e]);
+      // Then the 7 other cells that may hold an overlapping body. Most are
+      // empty: their occupancy bits, when kept, spare those a hash look-up.
+      unsigned around = 0x7f;
+      if (!grid.occupied_.empty()) {
+        around = 0;
+        const std::array<std::uint32_t, 7>& offsets = grid.bitOffsets_[place.upperHalf];
+        const std::uint64_t* occupied = grid.occupied_.data();
+        for (int k = 0; k < 7; ++k) {
+          const std::uint32_t bit = place.bit + offsets[k];
+          around |= unsigned(occupied[bit >> 6] >> (bit & 63) & 1) << k;
+        }
+      }
+      for (; around != 0 && examined < kMaxBodyCandidates; around &= around - 1) {
+        const int k = std::countr_zero(around);
+        const BodyGrid::Cell& cell =
+            grid.cells_[grid.find(place.key + kNeighbourOffsets[place.upperHalf][k])];
+        for (std::uint32_t e = cell.first, end = cell.first + cell.count;
+             e < end && examined < kMaxBodyCandidates; ++e)
+          examine(grid.entries_[e]);
+      }
     }
 
     if (nearest.size() == 0) continue;

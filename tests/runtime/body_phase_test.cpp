@@ -623,3 +623,78 @@ TEST_CASE(
   REQUIRE(cells.stopTime(64) == 1);
   REQUIRE(stopped > 20);  // the crowd met itself: the comparison means something
 }
+
+namespace {
+
+// Steps `crowd` (at most kSortedNeighbourBodies bodies: their pushers are
+// found by sorting) and the same crowd with one more body standing far
+// away (the grid's cells find them instead) for `frames` frames, requiring
+// the same frame for the crowd's bodies; returns the body contacts summed
+// over the frames.
+int requireSameAsWithFarBody(Crowd crowd, int frames) {
+  REQUIRE(crowd.bodies.size() <= std::size_t(bspf::kSortedNeighbourBodies));
+  const bspf::test::CompiledMesh level(yard());
+  Crowd withFar = crowd;
+  Body far;
+  far.position = Vec3(15, 0.86f, 19);
+  withFar.bodies.push_back(far);
+  withFar.forces.push_back(Vec3::Zero());
+  const std::size_t n = crowd.bodies.size();
+  std::vector<bspf::StepReport> reports(n), farReports(n + 1);
+  bspf::StepScratch scratch, farScratch;
+  int contacts = 0;
+  for (int frame = 0; frame < frames; ++frame) {
+    INFO("frame " << frame);
+    bspf::stepBodies(level.world, crowd.bodies, crowd.forces, kDt, scratch, reports);
+    bspf::stepBodies(level.world, withFar.bodies, withFar.forces, kDt, farScratch, farReports);
+    requireSameFrame(crowd.bodies, std::span<const Body>(withFar.bodies).first(n), reports,
+                     std::span<const bspf::StepReport>(farReports).first(n));
+    REQUIRE(farReports[n].bodyContacts == 0);
+    for (const auto& r : reports) contacts += r.bodyContacts;
+  }
+  return contacts;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "a small crowd is pushed as the grid's cells would push it: a 65th body far away changes "
+    "no push",
+    "[runtime][movement][bodies]") {
+  static_assert(bspf::kSortedNeighbourBodies == 64);
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO(methodName(method));
+  // 16 clusters of 4 overlapping bodies of three sizes, 2.4 m apart along x
+  // (so that no 34 lie within 4 cells along x, which would bring the grid
+  // back), along the yard's wall, walking.
+  Crowd crowd;
+  for (int i = 0; i < 64; ++i) {
+    Body b;
+    const int cluster = i / 4, member = i % 4;
+    b.position = Vec3(-18.0f + 2.4f * float(cluster) + 0.5f * float(member % 2), 0.9f,
+                      7.0f + 0.5f * float(member / 2));
+    b.radii = i % 3 == 0 ? bspf::EllipsoidRadii{0.3f, 0.5f} : bspf::EllipsoidRadii{0.45f, 0.85f};
+    if (i % 7 == 0) b.radii = {0.6f, 1.0f};
+    b.settings.method = method;
+    crowd.bodies.push_back(b);
+    const float angle = 2.399963f * float(i);
+    crowd.forces.emplace_back(std::cos(angle) * 60, 0, std::sin(angle) * 60);
+  }
+  const int contacts = requireSameAsWithFarBody(crowd, 40);
+  REQUIRE(contacts > 200);  // the crowd pushed itself: the comparison means something
+}
+
+TEST_CASE("a small pile with more candidates than the cap is pushed as the grid's cells push it",
+          "[runtime][movement][bodies]") {
+  // 64 bodies at one point: each has 63 others in its cell, more than
+  // kMaxBodyCandidates, so which pushers a body gets depends on the grid's
+  // order of examining them (the nearest, all at distance 0, by index).
+  static_assert(bspf::kMaxBodyCandidates < 63);
+  Crowd pile;
+  pile.bodies.resize(64);
+  for (Body& b : pile.bodies) b.position = Vec3(-2, 0.86f, 2);
+  pile.forces.assign(64, Vec3::Zero());
+  const int contacts = requireSameAsWithFarBody(pile, 30);
+  REQUIRE(contacts > 64 * bspf::kMaxBodyPushes);  // the first frame alone pushes every body
+}

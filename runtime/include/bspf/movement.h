@@ -324,6 +324,15 @@ inline constexpr int kMaxSweepCellBodies = 64;
 /// for bodies of one shape).
 inline constexpr int kSortedSweepBodies = kMaxSweepCellBodies;
 
+/// Crowds of at most this many bodies find each body's possible pushers by
+/// sorting the bodies' centres along x rather than through the hashed grid:
+/// the same pushers, so the same pushes (a pair is kept only when the grid
+/// would have examined it, and the sorting is used only when no body has
+/// more than kMaxBodyCandidates others within its grid cells' reach, so the
+/// candidate cap cuts nothing). A body with no other body within reach then
+/// costs a range check, not 8 cell look-ups.
+inline constexpr int kSortedNeighbourBodies = 64;
+
 /// The body-against-body phase for bodies [first, last) of `bodies`: first,
 /// a body whose move the grid's sweep cut short (BodyGrid::build) is set
 /// back along its move to where it met another body, as a move against the
@@ -383,8 +392,11 @@ void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> b
 /// radii in a grid of cells twice as wide as the widest body and
 /// twice as tall as the tallest, found through a hash table of the occupied
 /// cells. A body overlaps only bodies of its own cell and of the neighbours
-/// on the sides of the cell's middle it lies: 8 cells. Reusable across
-/// frames; it allocates only while growing.
+/// on the sides of the cell's middle it lies: 8 cells. For at most
+/// kSortedNeighbourBodies bodies, the pairs those cells would give are found
+/// by sorting the centres along x instead (the order is kept from frame to
+/// frame, so sorting again is nearly free). Reusable across frames; it
+/// allocates only while growing.
 class BodyGrid {
  public:
   /// Snapshots `bodies` (after their move against the level, before any
@@ -393,7 +405,7 @@ class BodyGrid {
   void build(std::span<const Body> bodies);
 
   /// Bodies in the last snapshot.
-  std::size_t size() const { return places_.size(); }
+  std::size_t size() const { return entries_.size(); }
 
   /// How far along its move (0 to 1) the sweep of the last build stopped
   /// body `i`: 1 when it went the whole way. Precondition: i < size().
@@ -449,6 +461,14 @@ class BodyGrid {
   /// `normal` (from b towards a) when they do.
   double meetTime(std::uint32_t a, std::uint32_t b, Vec3& normal) const;
 
+  /// For at most kSortedNeighbourBodies bodies whose entries_ are by body
+  /// index: fills nearHead_ and nearLinks_ by sorting the centres along x,
+  /// or returns false when the grid must find the pairs instead (a coordinate
+  /// or radius that is not finite, or a body with more than
+  /// kMaxBodyCandidates others near enough to be in its cells). `width`: the
+  /// cells' width, metres.
+  bool findNeighboursBySorting(float width);
+
   static constexpr std::uint64_t kFree = ~std::uint64_t(0);
   /// The table slot of `key` when a body is in that cell, else of a free slot.
   std::uint32_t find(std::uint64_t key) const;
@@ -456,8 +476,10 @@ class BodyGrid {
   float inverseWidth_ = 1, inverseHeight_ = 1;  ///< 1 / cell size, horizontal and vertical
   int shift_ = 60;                              ///< 64 - log2(cells_.size()), for the hash
   std::vector<Cell> cells_;                     ///< open addressing, a power of 2 long
-  std::vector<Entry> entries_;                  ///< by cell, body index order within a cell
-  std::vector<Place> places_;                   ///< by body index
+  /// By cell, body index order within a cell; by body index when
+  /// sortedNeighbours_.
+  std::vector<Entry> entries_;
+  std::vector<Place> places_;  ///< by body index
   /// When the box of the occupied cells, grown by one cell on every side, is
   /// small (a few hundred cells a body): a bit a cell of it, set where a
   /// body is, so that most empty neighbours cost a bit test, not a hash
@@ -474,6 +496,27 @@ class BodyGrid {
   std::vector<std::uint64_t> sweepPairs_;                            ///< a << 32 | b, a < b
   std::vector<std::uint64_t> sweepOrder_;  ///< low x's ordered bits << 32 | body, sorted
   std::vector<std::uint32_t> oversize_;    ///< fast bodies of more than kMaxSweepPieces pieces
+  /// The last build found the pairs by sorting (findNeighboursBySorting):
+  /// entries_ are by body index, places_ and the cells unused.
+  bool sortedNeighbours_ = false;
+  /// Builds left before a crowd that findNeighboursBySorting turned back is
+  /// sorted again (the grid's work meanwhile: the same pairs).
+  int buildsUntilSortingAgain_ = 0;
+  static constexpr int kBuildsBeforeSortingAgain = 30;
+  /// The centres' x (ordered bits) << 32 | body, sorted; kept from the last
+  /// build, whose order is nearly this build's.
+  std::vector<std::uint64_t> xOrder_;
+  /// The bodies the grid would examine for a body and whose boxes overlap
+  /// its own: a list a body, in nearLinks_ from nearHead_[body] on (the
+  /// order does not matter: NearestPushers keeps the nearest whatever the
+  /// order, and with no more candidates than the cap the grid examines all).
+  struct NearLink {
+    std::uint32_t body;
+    std::uint32_t next;  ///< in nearLinks_; kNoNeighbour ends the list
+  };
+  static constexpr std::uint32_t kNoNeighbour = ~std::uint32_t(0);
+  std::vector<std::uint32_t> nearHead_;
+  std::vector<NearLink> nearLinks_;
 };
 
 /// Per-thread scratch for the step. Reusable across worlds and frames; it
