@@ -37,19 +37,27 @@ struct Crowd {
   std::vector<Body> bodies;
   std::vector<Vec3> forces;
 };
+// Adds the crowd's body number `i` at `position`: of three sizes by i, and
+// walking in a direction of its own (golden-angle steps).
+void addCrowdBody(Crowd& crowd, int i, const Vec3& position, bspf::CollisionMethod method) {
+  Body b;
+  b.position = position;
+  b.radii = i % 3 == 0 ? bspf::EllipsoidRadii{0.3f, 0.5f} : bspf::EllipsoidRadii{0.45f, 0.85f};
+  if (i % 7 == 0) b.radii = {0.6f, 1.0f};
+  b.settings.method = method;
+  crowd.bodies.push_back(b);
+  const float angle = 2.399963f * float(i);
+  crowd.forces.emplace_back(std::cos(angle) * 60, 0, std::sin(angle) * 60);
+}
+
 Crowd packedCrowd(bspf::CollisionMethod method) {
   Crowd crowd;
   for (int i = 0; i < 300; ++i) {
-    Body b;
     const int k = i % 100;
-    b.position = Vec3(-4.2f + 0.85f * float(k % 10), 0.9f + 0.4f * float(i / 100),
-                      -4.2f + 0.85f * float(k / 10));
-    b.radii = i % 3 == 0 ? bspf::EllipsoidRadii{0.3f, 0.5f} : bspf::EllipsoidRadii{0.45f, 0.85f};
-    if (i % 7 == 0) b.radii = {0.6f, 1.0f};
-    b.settings.method = method;
-    crowd.bodies.push_back(b);
-    const float angle = 2.399963f * float(i);
-    crowd.forces.emplace_back(std::cos(angle) * 60, 0, std::sin(angle) * 60);
+    addCrowdBody(crowd, i,
+                 Vec3(-4.2f + 0.85f * float(k % 10), 0.9f + 0.4f * float(i / 100),
+                      -4.2f + 0.85f * float(k / 10)),
+                 method);
   }
   return crowd;
 }
@@ -670,16 +678,11 @@ TEST_CASE(
   // back), along the yard's wall, walking.
   Crowd crowd;
   for (int i = 0; i < 64; ++i) {
-    Body b;
     const int cluster = i / 4, member = i % 4;
-    b.position = Vec3(-18.0f + 2.4f * float(cluster) + 0.5f * float(member % 2), 0.9f,
-                      7.0f + 0.5f * float(member / 2));
-    b.radii = i % 3 == 0 ? bspf::EllipsoidRadii{0.3f, 0.5f} : bspf::EllipsoidRadii{0.45f, 0.85f};
-    if (i % 7 == 0) b.radii = {0.6f, 1.0f};
-    b.settings.method = method;
-    crowd.bodies.push_back(b);
-    const float angle = 2.399963f * float(i);
-    crowd.forces.emplace_back(std::cos(angle) * 60, 0, std::sin(angle) * 60);
+    addCrowdBody(crowd, i,
+                 Vec3(-18.0f + 2.4f * float(cluster) + 0.5f * float(member % 2), 0.9f,
+                      7.0f + 0.5f * float(member / 2)),
+                 method);
   }
   const int contacts = requireSameAsWithFarBody(crowd, 40);
   REQUIRE(contacts > 200);  // the crowd pushed itself: the comparison means something
