@@ -4,9 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <numeric>
 #include <span>
 #include <tuple>
-#include <unordered_map>
+
+#include "flat_map.h"
 
 namespace bspc {
 
@@ -140,7 +142,8 @@ std::vector<bool> solidBehind(const Geometry& g, const EdgeMap& edges) {
   std::vector<bool> twin(n);
   for (std::uint32_t t = 0; t < n; ++t) twin[t] = hasTwin(g.mesh, edges, t);
   std::vector<bool> backed(n, true);
-  std::vector<std::vector<std::uint32_t>> dependsOn(n);
+  // (u, t): t is backed only if u is. One list, not a list per triangle.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> reliance;
   for (std::uint32_t t = 0; t < n; ++t) {
     for (int k = 0; k < 3 && backed[t]; ++k) {
       const Turn first = firstTurn(g, edges, t, k, -g.normal[t]);
@@ -155,23 +158,26 @@ std::vector<bool> solidBehind(const Geometry& g, const EdgeMap& edges) {
         if (g.normal[t].dot(g.normal[first.triangle]) <= 0)
           backed[t] = false;
         else
-          dependsOn[t].push_back(first.triangle);
+          reliance.push_back({first.triangle, t});
       }
     }
   }
   // Unbacked triangles unback those that rely on them, through the chain
   // (a worklist: linear however long the chains of coplanar triangles).
-  std::vector<std::vector<std::uint32_t>> reliedOnBy(n);
-  for (std::uint32_t t = 0; t < n; ++t)
-    for (const std::uint32_t u : dependsOn[t]) reliedOnBy[u].push_back(t);
+  // Those relying on u: reliedOnBy[reliedStart[u], reliedStart[u + 1]).
+  std::vector<std::uint32_t> reliedStart(n + 1, 0), reliedOnBy(reliance.size());
+  for (const auto& [u, t] : reliance) ++reliedStart[u + 1];
+  std::partial_sum(reliedStart.begin(), reliedStart.end(), reliedStart.begin());
+  std::vector<std::uint32_t> next(reliedStart.begin(), reliedStart.end() - 1);
+  for (const auto& [u, t] : reliance) reliedOnBy[next[u]++] = t;
   std::vector<std::uint32_t> pending;
   for (std::uint32_t t = 0; t < n; ++t)
     if (!backed[t]) pending.push_back(t);
   while (!pending.empty()) {
     const std::uint32_t u = pending.back();
     pending.pop_back();
-    for (const std::uint32_t t : reliedOnBy[u])
-      if (backed[t]) {
+    for (std::uint32_t i = reliedStart[u]; i < reliedStart[u + 1]; ++i)
+      if (const std::uint32_t t = reliedOnBy[i]; backed[t]) {
         backed[t] = false;
         pending.push_back(t);
       }
@@ -185,20 +191,76 @@ struct PlaneKey {
   std::int64_t nx, ny, nz, d;
   bool operator==(const PlaneKey&) const = default;
 };
-struct PlaneKeyHash {
-  std::size_t operator()(const PlaneKey& k) const {
-    std::uint64_t h = std::uint64_t(k.nx) * 0x9E3779B97F4A7C15ull;
-    h ^= std::uint64_t(k.ny) * 0xC2B2AE3D27D4EB4Full + (h << 6) + (h >> 2);
-    h ^= std::uint64_t(k.nz) * 0x165667B19E3779F9ull + (h << 6) + (h >> 2);
-    h ^= std::uint64_t(k.d) * 0x27D4EB2F165667C5ull + (h << 6) + (h >> 2);
-    return std::size_t(h);
-  }
-};
 constexpr double kNormalStep = 1e-3, kDistanceStep = 1e-2;
 PlaneKey planeKey(const V3& n, double d) {
   return {std::llround(n.x() / kNormalStep), std::llround(n.y() / kNormalStep),
           std::llround(n.z() / kNormalStep), std::llround(d / kDistanceStep)};
 }
+
+// The backed triangles by plane bucket. A face looks in the 81 buckets
+// around its own; most are empty, so they are found as 27 normal buckets
+// (one hash lookup each) whose triangles are sorted by distance bucket (a
+// binary search for the three wanted).
+class PlaneBuckets {
+ public:
+  struct Entry {
+    PlaneKey key;
+    std::uint32_t triangle;
+    Eigen::AlignedBox3d box;
+  };
+
+  explicit PlaneBuckets(std::vector<Entry> entries) : entries_(std::move(entries)) {
+    std::sort(entries_.begin(), entries_.end(), [](const Entry& x, const Entry& y) {
+      return std::tie(x.key.nx, x.key.ny, x.key.nz, x.key.d, x.triangle) <
+             std::tie(y.key.nx, y.key.ny, y.key.nz, y.key.d, y.triangle);
+    });
+    for (std::uint32_t i = 0; i < entries_.size();) {
+      std::uint32_t j = i;
+      while (j < entries_.size() && sameNormal(entries_[j].key, entries_[i].key)) ++j;
+      runs_.tryEmplace(normalOf(entries_[i].key), {i, j});
+      i = j;
+    }
+  }
+
+  // Calls visit(entry) for every entry whose bucket is within one step of
+  // `home` in each of its four numbers, in no particular order.
+  template <typename Visit>
+  void forNeighbours(const PlaneKey& home, Visit&& visit) const {
+    for (std::int64_t dx = -1; dx <= 1; ++dx)
+      for (std::int64_t dy = -1; dy <= 1; ++dy)
+        for (std::int64_t dz = -1; dz <= 1; ++dz) {
+          const auto* run = runs_.find({home.nx + dx, home.ny + dy, home.nz + dz});
+          if (!run) continue;
+          const auto first = entries_.begin() + run->first, last = entries_.begin() + run->second;
+          for (auto it = std::lower_bound(
+                   first, last, home.d - 1,
+                   [](const Entry&entry, std::int64_t d) { return entry.key.d < d; });
+               it != last && it->key.d <= home.d + 1; ++it)
+            visit(*it);
+        }
+  }
+
+ private:
+  struct NormalKey {
+    std::int64_t nx, ny, nz;
+    bool operator==(const NormalKey&) const = default;
+  };
+  struct NormalKeyHash {
+    std::uint64_t operator()(const NormalKey& k) const {
+      std::uint64_t h = std::uint64_t(k.nx);
+      h = (h ^ (h >> 29)) * 0xBF58476D1CE4E5B9ull + std::uint64_t(k.ny);
+      h = (h ^ (h >> 29)) * 0xBF58476D1CE4E5B9ull + std::uint64_t(k.nz);
+      return h ^ (h >> 32);
+    }
+  };
+  static NormalKey normalOf(const PlaneKey& k) { return {k.nx, k.ny, k.nz}; }
+  static bool sameNormal(const PlaneKey& a, const PlaneKey& b) {
+    return a.nx == b.nx && a.ny == b.ny && a.nz == b.nz;
+  }
+
+  std::vector<Entry> entries_;
+  FlatMap<NormalKey, std::pair<std::uint32_t, std::uint32_t>, NormalKeyHash> runs_;
+};
 
 using Polygon = std::vector<V2>;
 
@@ -232,30 +294,62 @@ void split(const Polygon& p, const V2& a, const V2& along, double margin, Polygo
   }
 }
 
+// Convex polygons end to end in one array, so clipping many of them makes
+// no allocation per polygon.
+class Polygons {
+ public:
+  std::size_t size() const { return ends_.size(); }
+  std::span<const V2> operator[](std::size_t i) const {
+    const std::size_t first = i == 0 ? 0 : ends_[i - 1];
+    return {points_.data() + first, ends_[i] - first};
+  }
+  void push_back(std::span<const V2> polygon) {
+    points_.insert(points_.end(), polygon.begin(), polygon.end());
+    ends_.push_back(points_.size());
+  }
+  void clear() { points_.clear(), ends_.clear(); }
+  bool empty() const { return ends_.empty(); }
+
+ private:
+  std::vector<V2> points_;
+  std::vector<std::size_t> ends_;
+};
+
+// What covered() clips with, kept from face to face so that it allocates
+// only when a face needs more room than any before it.
+struct ClipScratch {
+  Polygons left, next;
+  Polygon piece, inside, outside;
+};
+
 // Whether triangle f is covered by the union of triangles `cover` (all in
 // its plane, facing the other way), each grown by 0.1 mm.
-bool covered(const Geometry& g, std::uint32_t f, const std::vector<std::uint32_t>& cover) {
+bool covered(const Geometry& g, std::uint32_t f, const std::vector<std::uint32_t>& cover,
+             ClipScratch& scratch) {
   const V3 origin = g.corner(f, 0);
   const V3 u = (g.corner(f, 1) - origin).normalized();
   const V3 v = g.normal[f].cross(u);
   auto flat = [&](const V3& p) { return V2((p - origin).dot(u), (p - origin).dot(v)); };
-  std::vector<Polygon> left{{flat(g.corner(f, 0)), flat(g.corner(f, 1)), flat(g.corner(f, 2))}};
+  auto& [left, next, piece, inside, outside] = scratch;
+  left.clear();
+  left.push_back(std::array{flat(g.corner(f, 0)), flat(g.corner(f, 1)), flat(g.corner(f, 2))});
   constexpr double kMargin = 1e-4, kLeftArea = 1e-8;
   constexpr std::size_t kMaxPieces = 256;
-  Polygon inside, outside;
   for (const std::uint32_t c : cover) {
     Polygon shape{flat(g.corner(c, 0)), flat(g.corner(c, 1)), flat(g.corner(c, 2))};
     if (area(shape) < 0) std::reverse(shape.begin(), shape.end());
-    std::vector<Polygon> next;
-    for (Polygon piece : left) {
+    next.clear();
+    for (std::size_t i = 0; i < left.size(); ++i) {
+      piece.assign(left[i].begin(), left[i].end());
       for (int e = 0; e < 3 && !piece.empty(); ++e) {
         const V2 along = (shape[(e + 1) % 3] - shape[e]).normalized();
         split(piece, shape[e], along, kMargin, inside, outside);
         if (outside.size() >= 3 && std::abs(area(outside)) > kLeftArea) next.push_back(outside);
-        piece = inside.size() >= 3 ? inside : Polygon{};
+        std::swap(piece, inside);
+        if (piece.size() < 3) piece.clear();
       }
     }
-    left = std::move(next);
+    std::swap(left, next);
     if (left.empty()) return true;
     if (left.size() > kMaxPieces) return false;
   }
@@ -270,17 +364,21 @@ std::vector<bool> findCoveredFaces(const Mesh& mesh) {
   const std::vector<bool> backed = solidBehind(g, edges);
   const std::size_t n = mesh.triangles.size();
 
-  std::unordered_map<PlaneKey, std::vector<std::uint32_t>, PlaneKeyHash> planes;
-  for (std::uint32_t t = 0; t < n; ++t)
-    if (backed[t]) planes[planeKey(g.normal[t], g.normal[t].dot(g.corner(t, 0)))].push_back(t);
-
   auto bounds = [&](std::uint32_t t) {
     Eigen::AlignedBox3d box;
     for (int k = 0; k < 3; ++k) box.extend(g.corner(t, k));
     return box;
   };
+  std::vector<PlaneBuckets::Entry> backedEntries;
+  for (std::uint32_t t = 0; t < n; ++t)
+    if (backed[t])
+      backedEntries.push_back(
+          {planeKey(g.normal[t], g.normal[t].dot(g.corner(t, 0))), t, bounds(t)});
+  const PlaneBuckets planes(std::move(backedEntries));
+
   std::vector<bool> drop(n, false);
   std::vector<std::uint32_t> cover;
+  ClipScratch scratch;
   for (std::uint32_t f = 0; f < n; ++f) {
     const V3 opposite = -g.normal[f];
     const double d = opposite.dot(g.corner(f, 0));
@@ -291,29 +389,23 @@ std::vector<bool> findCoveredFaces(const Mesh& mesh) {
     const double tolerance = 1e-4 + 1e-6 * scale;
     box.min().array() -= tolerance, box.max().array() += tolerance;
     cover.clear();
-    for (std::int64_t dx = -1; dx <= 1; ++dx)
-      for (std::int64_t dy = -1; dy <= 1; ++dy)
-        for (std::int64_t dz = -1; dz <= 1; ++dz)
-          for (std::int64_t dd = -1; dd <= 1; ++dd) {
-            const auto it = planes.find({home.nx + dx, home.ny + dy, home.nz + dz, home.d + dd});
-            if (it == planes.end()) continue;
-            for (const std::uint32_t c : it->second) {
-              if (c == f || g.normal[c].dot(opposite) < 1 - 2e-7) continue;
-              if (!box.intersects(bounds(c))) continue;
-              bool inPlane = true;
-              for (int k = 0; k < 3; ++k)
-                inPlane = inPlane &&
-                          std::abs(g.normal[c].dot(g.corner(f, k) - g.corner(c, 0))) <= tolerance &&
-                          std::abs(g.normal[f].dot(g.corner(c, k) - g.corner(f, 0))) <= tolerance;
-              if (inPlane) cover.push_back(c);
-            }
-          }
+    planes.forNeighbours(home, [&](const PlaneBuckets::Entry& entry) {
+      const std::uint32_t c = entry.triangle;
+      if (c == f || g.normal[c].dot(opposite) < 1 - 2e-7) return;
+      if (!box.intersects(entry.box)) return;
+      bool inPlane = true;
+      for (int k = 0; k < 3; ++k)
+        inPlane = inPlane &&
+                  std::abs(g.normal[c].dot(g.corner(f, k) - g.corner(c, 0))) <= tolerance &&
+                  std::abs(g.normal[f].dot(g.corner(c, k) - g.corner(f, 0))) <= tolerance;
+      if (inPlane) cover.push_back(c);
+    });
     // Many overlapping faces in one plane (hostile input): keep the face
     // rather than clip it against them all.
     constexpr std::size_t kMaxCover = 64;
     if (cover.empty() || cover.size() > kMaxCover) continue;
     std::sort(cover.begin(), cover.end());
-    drop[f] = covered(g, f, cover);
+    drop[f] = covered(g, f, cover, scratch);
   }
 
   return drop;
