@@ -35,14 +35,44 @@ struct EdgeUse {
 class EdgeMap {
  public:
   explicit EdgeMap(const Mesh& mesh) {
-    uses_.reserve(mesh.triangles.size() * 3);
+    // Sorted in two steps, cheaper than one sort of them all: counted into
+    // runs by low vertex, then each run sorted.
+    constexpr std::ptrdiff_t kShortRun = 16;
+    auto use = [&](std::uint32_t t, int k) {
+      const std::uint32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
+      return EdgeUse{std::min(a, b), std::max(a, b), t, k};
+    };
+    std::uint32_t vertexCount = 0;
+    for (const auto& tri : mesh.triangles)
+      for (const std::uint32_t v : tri) vertexCount = std::max(vertexCount, v + 1);
+    std::vector<std::size_t> runStart(std::size_t(vertexCount) + 1, 0);
+    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k) ++runStart[use(t, k).low + 1];
+    std::partial_sum(runStart.begin(), runStart.end(), runStart.begin());
+    uses_.resize(mesh.triangles.size() * 3);
+    std::vector<std::size_t> next(runStart.begin(), runStart.end() - 1);
     for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
       for (int k = 0; k < 3; ++k) {
-        const std::uint32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
-        uses_.push_back({std::min(a, b), std::max(a, b), t, k});
+        const EdgeUse u = use(t, k);
+        uses_[next[u.low]++] = u;
       }
-    std::sort(uses_.begin(), uses_.end(),
-              [](const EdgeUse& x, const EdgeUse& y) { return x.key() < y.key(); });
+    // A run is in (triangle, k) order as filled: sorted on the high vertex
+    // alone, stably (insertion, for the short runs of most vertices), it is
+    // in (high, triangle, k) order.
+    for (std::uint32_t v = 0; v < vertexCount; ++v) {
+      const auto first = uses_.begin() + runStart[v], last = uses_.begin() + runStart[v + 1];
+      if (last - first > kShortRun) {
+        std::sort(first, last,
+                  [](const EdgeUse& x, const EdgeUse& y) { return x.key() < y.key(); });
+        continue;
+      }
+      for (auto it = first + (first != last); it < last; ++it) {
+        const EdgeUse moving = *it;
+        auto hole = it;
+        for (; hole != first && (hole - 1)->high > moving.high; --hole) *hole = *(hole - 1);
+        *hole = moving;
+      }
+    }
     group_.assign(mesh.triangles.size(), {});
     for (std::size_t i = 0; i < uses_.size();) {
       std::size_t j = i;
@@ -66,25 +96,28 @@ class EdgeMap {
 struct Geometry {
   const Mesh& mesh;
   std::vector<V3> normal;
+  // Per triangle, edge k: the unit direction in its plane, perpendicular to
+  // the edge, pointing into it. Once each: turning about an edge needs it for
+  // every face around.
+  std::vector<std::array<V3, 3>> inward;
   explicit Geometry(const Mesh& m) : mesh(m) {
     normal.reserve(m.triangles.size());
     for (const auto& t : m.triangles)
       normal.push_back((m.vertices[t[1]] - m.vertices[t[0]])
                            .cross(m.vertices[t[2]] - m.vertices[t[0]])
                            .normalized());
+    inward.resize(m.triangles.size());
+    for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k)
+        inward[t][k] = normal[t].cross(corner(t, k + 1) - corner(t, k)).normalized();
   }
   const V3& corner(std::uint32_t t, int k) const { return mesh.vertices[mesh.triangles[t][k % 3]]; }
-  // The unit direction in triangle t's plane, perpendicular to its edge k,
-  // pointing into t.
-  V3 inward(std::uint32_t t, int k) const {
-    return normal[t].cross(corner(t, k + 1) - corner(t, k)).normalized();
-  }
   // The angle, in [0, 2 pi), from triangle t (turning through `side`, t's
   // normal or its opposite) to triangle u about their shared edge (t's edge
   // k, u's edge j).
   double turn(std::uint32_t t, int k, const V3& side, std::uint32_t u, int j) const {
-    const V3 w = inward(u, j);
-    double angle = std::atan2(w.dot(side), w.dot(inward(t, k)));
+    const V3& w = inward[u][j];
+    double angle = std::atan2(w.dot(side), w.dot(inward[t][k]));
     if (angle < 0) angle += 2 * std::numbers::pi;
     return angle;
   }
