@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <numeric>
 #include <span>
@@ -153,6 +154,16 @@ Turn firstTurn(const Geometry& g, const EdgeMap& edges, std::uint32_t t, int k, 
   return best;
 }
 
+// Per triangle, edge k: the face first met turning about the edge from the
+// triangle's back (firstTurn through -normal), into its solid.
+using BackTurns = std::vector<std::array<Turn, 3>>;
+BackTurns backTurns(const Geometry& g, const EdgeMap& edges) {
+  BackTurns back(g.mesh.triangles.size());
+  for (std::uint32_t t = 0; t < back.size(); ++t)
+    for (int k = 0; k < 3; ++k) back[t][k] = firstTurn(g, edges, t, k, -g.normal[t]);
+  return back;
+}
+
 // Triangles with the same three corners as t wound the other way.
 bool hasTwin(const Mesh& mesh, const EdgeMap& edges, std::uint32_t t) {
   const auto& tri = mesh.triangles[t];
@@ -170,7 +181,7 @@ bool hasTwin(const Mesh& mesh, const EdgeMap& edges, std::uint32_t t) {
 // (under 180 degrees) and has no twin (is not one side of a two-sided
 // surface), or continues the plane and is itself backed. Decided by a fixed point: a plane of
 // coplanar triangles is backed only if its rim is.
-std::vector<bool> solidBehind(const Geometry& g, const EdgeMap& edges) {
+std::vector<bool> solidBehind(const Geometry& g, const EdgeMap& edges, const BackTurns& back) {
   const std::size_t n = g.mesh.triangles.size();
   std::vector<bool> twin(n);
   for (std::uint32_t t = 0; t < n; ++t) twin[t] = hasTwin(g.mesh, edges, t);
@@ -179,7 +190,7 @@ std::vector<bool> solidBehind(const Geometry& g, const EdgeMap& edges) {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> reliance;
   for (std::uint32_t t = 0; t < n; ++t) {
     for (int k = 0; k < 3 && backed[t]; ++k) {
-      const Turn first = firstTurn(g, edges, t, k, -g.normal[t]);
+      const Turn& first = back[t][k];
       const bool found = first.triangle != t;
       if (!found || !g.consistent(t, k, first.triangle, first.k) || first.angle < kAngleTolerance ||
           first.angle > std::numbers::pi + kAngleTolerance) {
@@ -391,10 +402,24 @@ bool covered(const Geometry& g, std::uint32_t f, const std::vector<std::uint32_t
 
 }  // namespace
 
-std::vector<bool> findCoveredFaces(const Mesh& mesh) {
-  const Geometry g(mesh);
-  const EdgeMap edges(mesh);
-  const std::vector<bool> backed = solidBehind(g, edges);
+struct SolidEdges::Parts {
+  Geometry geometry;
+  EdgeMap edges;
+  BackTurns back;
+  explicit Parts(const Mesh& mesh)
+      : geometry(mesh), edges(mesh), back(backTurns(geometry, edges)) {}
+};
+
+SolidEdges::SolidEdges(const Mesh& mesh) : parts_(std::make_unique<const Parts>(mesh)) {}
+SolidEdges::~SolidEdges() = default;
+const Mesh& SolidEdges::mesh() const { return parts_->geometry.mesh; }
+
+std::vector<bool> findCoveredFaces(const Mesh& mesh) { return findCoveredFaces(SolidEdges(mesh)); }
+
+std::vector<bool> findCoveredFaces(const SolidEdges& solid) {
+  const Geometry& g = solid.parts().geometry;
+  const Mesh& mesh = g.mesh;
+  const std::vector<bool> backed = solidBehind(g, solid.parts().edges, solid.parts().back);
   const std::size_t n = mesh.triangles.size();
 
   auto bounds = [&](std::uint32_t t) {
@@ -455,10 +480,14 @@ Mesh dropCoveredFaces(const Mesh& mesh, EdgeReport& report) {
 }
 
 std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const Mesh& mesh) {
+  return solidNeighbours(SolidEdges(mesh));
+}
+
+std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const SolidEdges& solid) {
   constexpr std::uint32_t kNone = ~std::uint32_t(0);
-  const std::size_t n = mesh.triangles.size();
-  const Geometry g(mesh);
-  const EdgeMap edges(mesh);
+  const Geometry& g = solid.parts().geometry;
+  const EdgeMap& edges = solid.parts().edges;
+  const std::size_t n = g.mesh.triangles.size();
   // Each edge's candidate: the other triangle of a two-triangle edge, or the
   // first face turning from the triangle's back into its solid; kept when
   // it runs the other way along the edge.
@@ -471,7 +500,7 @@ std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const Mesh& mesh) {
         const EdgeUse& other = around[0].triangle == t ? around[1] : around[0];
         found = {other.triangle, other.k};
       } else if (around.size() > 2) {
-        const Turn first = firstTurn(g, edges, t, k, -g.normal[t]);
+        const Turn& first = solid.parts().back[t][k];
         if (first.triangle != t) found = {first.triangle, first.k};
       }
       if (found.first != kNone && !g.consistent(t, k, found.first, found.second))
