@@ -243,8 +243,9 @@ PlaneKey planeKey(const V3& n, double d) {
 
 // The backed triangles by plane bucket. A face looks in the 81 buckets
 // around its own; most are empty, so they are found as 27 normal buckets
-// (one hash lookup each) whose triangles are sorted by distance bucket (a
-// binary search for the three wanted).
+// (one hash lookup each, made once per normal bucket asked about: the
+// faces of a level share few) whose triangles are sorted by distance
+// bucket (a binary search for the three wanted).
 class PlaneBuckets {
  public:
   struct Entry {
@@ -269,19 +270,26 @@ class PlaneBuckets {
   // Calls visit(entry) for every entry whose bucket is within one step of
   // `home` in each of its four numbers, in no particular order.
   template <typename Visit>
-  void forNeighbours(const PlaneKey& home, Visit&& visit) const {
-    for (std::int64_t dx = -1; dx <= 1; ++dx)
-      for (std::int64_t dy = -1; dy <= 1; ++dy)
-        for (std::int64_t dz = -1; dz <= 1; ++dz) {
-          const auto* run = runs_.find({home.nx + dx, home.ny + dy, home.nz + dz});
-          if (!run) continue;
-          const auto first = entries_.begin() + run->first, last = entries_.begin() + run->second;
-          for (auto it = std::lower_bound(
-                   first, last, home.d - 1,
-                   [](const Entry&entry, std::int64_t d) { return entry.key.d < d; });
-               it != last && it->key.d <= home.d + 1; ++it)
-            visit(*it);
-        }
+  void forNeighbours(const PlaneKey& home, Visit&& visit) {
+    const auto [known, added] = around_.tryEmplace(normalOf(home), {});
+    if (added) {
+      const auto first = static_cast<std::uint32_t>(aroundRuns_.size());
+      for (std::int64_t dx = -1; dx <= 1; ++dx)
+        for (std::int64_t dy = -1; dy <= 1; ++dy)
+          for (std::int64_t dz = -1; dz <= 1; ++dz)
+            if (const Run* run = runs_.find({home.nx + dx, home.ny + dy, home.nz + dz}))
+              aroundRuns_.push_back(*run);
+      *known = {first, static_cast<std::uint32_t>(aroundRuns_.size())};
+    }
+    for (std::uint32_t r = known->first; r < known->second; ++r) {
+      const auto first = entries_.begin() + aroundRuns_[r].first,
+                 last = entries_.begin() + aroundRuns_[r].second;
+      for (auto it =
+               std::lower_bound(first, last, home.d - 1,
+                                [](const Entry&entry, std::int64_t d) { return entry.key.d < d; });
+           it != last && it->key.d <= home.d + 1; ++it)
+        visit(*it);
+    }
   }
 
  private:
@@ -302,8 +310,13 @@ class PlaneBuckets {
     return a.nx == b.nx && a.ny == b.ny && a.nz == b.nz;
   }
 
+  // A range of entries_ (one normal bucket's), or of aroundRuns_.
+  using Run = std::pair<std::uint32_t, std::uint32_t>;
   std::vector<Entry> entries_;
-  FlatMap<NormalKey, std::pair<std::uint32_t, std::uint32_t>, NormalKeyHash> runs_;
+  FlatMap<NormalKey, Run, NormalKeyHash> runs_;
+  // Per normal bucket asked about: the runs of the buckets around it.
+  FlatMap<NormalKey, Run, NormalKeyHash> around_;
+  std::vector<Run> aroundRuns_;
 };
 
 using Polygon = std::vector<V2>;
@@ -432,7 +445,7 @@ std::vector<bool> findCoveredFaces(const SolidEdges& solid) {
     if (backed[t])
       backedEntries.push_back(
           {planeKey(g.normal[t], g.normal[t].dot(g.corner(t, 0))), t, bounds(t)});
-  const PlaneBuckets planes(std::move(backedEntries));
+  PlaneBuckets planes(std::move(backedEntries));
 
   std::vector<bool> drop(n, false);
   std::vector<std::uint32_t> cover;
