@@ -187,8 +187,14 @@ class Containers {
 // 1, and a body coming from where it is 0 (far away) would have to cross the
 // surface to reach the point. Convexity only picks the pieces worth trying.
 std::vector<bool> findBuriedFaces(const Mesh& mesh, BuriedReport& report, bspf::ThreadPool* pool) {
+  return findBuriedFaces(SolidEdges(mesh), report, pool);
+}
+
+std::vector<bool> findBuriedFaces(const SolidEdges& edges, BuriedReport& report,
+                                  bspf::ThreadPool* pool) {
+  const Mesh& mesh = edges.mesh();
   const std::size_t n = mesh.triangles.size();
-  const ClosedPieces pieces = findClosedPieces(mesh, solidNeighbours(mesh));
+  const ClosedPieces pieces = findClosedPieces(mesh, solidNeighbours(edges));
   const Containers containers(mesh, pieces);
   report.closedPieces = static_cast<std::uint32_t>(pieces.volume6.size());
   report.containers = static_cast<std::uint32_t>(containers.size());

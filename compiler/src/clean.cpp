@@ -9,7 +9,8 @@
 #include <sstream>
 #include <string>
 #include <unordered_map>
-#include <unordered_set>
+
+#include "flat_map.h"
 
 namespace bspc {
 
@@ -21,12 +22,64 @@ struct CellKey {
 };
 
 struct CellHash {
-  std::size_t operator()(const CellKey& k) const {
+  std::uint64_t operator()(const CellKey& k) const {
     std::uint64_t h = static_cast<std::uint64_t>(k.x) * 0x9E3779B97F4A7C15ull;
     h ^= static_cast<std::uint64_t>(k.y) * 0xC2B2AE3D27D4EB4Full + (h << 6) + (h >> 2);
     h ^= static_cast<std::uint64_t>(k.z) * 0x165667B19E3779F9ull + (h << 6) + (h >> 2);
-    return static_cast<std::size_t>(h);
+    return h;
   }
+};
+
+// The first vertex at each position, -0 counted as +0 (they weld alike): a
+// hash set of vertex indices, the positions read from the vertices, so it
+// takes 4 bytes a slot however many copies a position has.
+class FirstCopies {
+ public:
+  explicit FirstCopies(const std::vector<Eigen::Vector3d>& vertices) : vertices_(vertices) {
+    resize(16);
+  }
+
+  // The first vertex at vertex i's position: i itself when it is the first
+  // (vertices are offered in order).
+  std::uint32_t firstOf(std::uint32_t i) {
+    if (2 * (size_ + 1) > slots_.size()) resize(2 * slots_.size());
+    const Eigen::Vector3d& p = vertices_[i];
+    for (std::size_t s = slotOf(p);; s = (s + 1) & (slots_.size() - 1)) {
+      if (slots_[s] == kEmpty) {
+        slots_[s] = i;
+        ++size_;
+        return i;
+      }
+      if (vertices_[slots_[s]] == p) return slots_[s];
+    }
+  }
+
+ private:
+  static constexpr std::uint32_t kEmpty = std::numeric_limits<std::uint32_t>::max();
+
+  std::size_t slotOf(const Eigen::Vector3d& p) const {
+    std::uint64_t h = std::bit_cast<std::uint64_t>(p.x() + 0.0);
+    h = (h ^ (h >> 29)) * 0xBF58476D1CE4E5B9ull + std::bit_cast<std::uint64_t>(p.y() + 0.0);
+    h = (h ^ (h >> 29)) * 0xBF58476D1CE4E5B9ull + std::bit_cast<std::uint64_t>(p.z() + 0.0);
+    return std::size_t(((h ^ (h >> 32)) * 0x9E3779B97F4A7C15ull) >> shift_);
+  }
+
+  void resize(std::size_t slots) {
+    std::vector<std::uint32_t> old = std::move(slots_);
+    slots_.assign(slots, kEmpty);
+    shift_ = 64 - std::countr_zero(slots);
+    for (const std::uint32_t v : old)
+      if (v != kEmpty) {
+        std::size_t s = slotOf(vertices_[v]);
+        while (slots_[s] != kEmpty) s = (s + 1) & (slots - 1);
+        slots_[s] = v;
+      }
+  }
+
+  const std::vector<Eigen::Vector3d>& vertices_;
+  std::vector<std::uint32_t> slots_;
+  int shift_ = 64;
+  std::size_t size_ = 0;
 };
 
 // Beyond this many tolerances from 0, a coordinate is keyed by its exact
@@ -46,8 +99,19 @@ constexpr std::int64_t kExactKeys = std::int64_t(1) << 40;
 std::vector<std::uint32_t> weld(const std::vector<Eigen::Vector3d>& vertices, double tolerance) {
   std::vector<std::uint32_t> target(vertices.size());
   const double tolerance2 = tolerance * tolerance;
-  std::unordered_map<CellKey, std::vector<std::uint32_t>, CellHash> cells;
-  cells.reserve(vertices.size());
+  // The vertices kept in each cell, as a chain through `kept`: the cell's
+  // latest, then each one's predecessor.
+  struct Kept {
+    std::uint32_t vertex, previous;
+  };
+  std::vector<Kept> kept;
+  FlatMap<CellKey, std::uint32_t, CellHash> cellLatest;
+  constexpr std::uint32_t kEndOfCell = std::numeric_limits<std::uint32_t>::max();
+  // A vertex at the position of an earlier one (most of them: a triangle
+  // soup repeats each corner) welds where the first one did: it searches the
+  // same cells, where every vertex kept since lies after the first one's
+  // answer. -0 and +0 are one position.
+  FirstCopies firstCopies(vertices);
   // Whether the axis is keyed by value, and the key.
   auto keyOf = [&](double c, bool& exact) {
     exact = !(std::abs(c) <= kGridCells * tolerance) || tolerance == 0;
@@ -57,6 +121,10 @@ std::vector<std::uint32_t> weld(const std::vector<Eigen::Vector3d>& vertices, do
   };
   for (std::uint32_t i = 0; i < vertices.size(); ++i) {
     const Eigen::Vector3d& p = vertices[i];
+    if (const std::uint32_t first = firstCopies.firstOf(i); first != i) {
+      target[i] = target[first];
+      continue;
+    }
     bool exact[3];
     const CellKey home{keyOf(p.x(), exact[0]), keyOf(p.y(), exact[1]), keyOf(p.z(), exact[2])};
     auto reach = [&](int axis) { return exact[axis] ? 0 : 1; };
@@ -64,21 +132,33 @@ std::vector<std::uint32_t> weld(const std::vector<Eigen::Vector3d>& vertices, do
     for (std::int64_t dx = -reach(0); dx <= reach(0); ++dx)
       for (std::int64_t dy = -reach(1); dy <= reach(1); ++dy)
         for (std::int64_t dz = -reach(2); dz <= reach(2); ++dz) {
-          const auto it = cells.find({home.x + dx, home.y + dy, home.z + dz});
-          if (it == cells.end()) continue;
-          for (const std::uint32_t j : it->second)
+          const std::uint32_t* latest = cellLatest.find({home.x + dx, home.y + dy, home.z + dz});
+          for (std::uint32_t e = latest ? *latest : kEndOfCell; e != kEndOfCell;
+               e = kept[e].previous) {
+            const std::uint32_t j = kept[e].vertex;
             if (j < best && (vertices[j] - p).squaredNorm() <= tolerance2) best = j;
+          }
         }
     target[i] = best;
-    if (best == i) cells[home].push_back(i);
+    if (best == i) {
+      const auto entry = static_cast<std::uint32_t>(kept.size());
+      const auto [latest, added] = cellLatest.tryEmplace(home, entry);
+      kept.push_back({i, added ? kEndOfCell : *latest});
+      *latest = entry;
+    }
   }
   return target;
 }
 
+// A triangle's corners as a key (compared member by member).
+struct TriangleKey {
+  std::uint32_t a, b, c;
+  bool operator==(const TriangleKey&) const = default;
+};
 struct TriangleHash {
-  std::size_t operator()(const std::array<std::uint32_t, 3>& t) const {
-    return (std::size_t(t[0]) * 73856093u) ^ (std::size_t(t[1]) * 19349663u) ^
-           (std::size_t(t[2]) * 83492791u);
+  std::uint64_t operator()(const TriangleKey& t) const {
+    return (std::uint64_t(t.a) * 73856093u) ^ (std::uint64_t(t.b) * 19349663u) ^
+           (std::uint64_t(t.c) * 83492791u);
   }
 };
 
@@ -165,8 +245,7 @@ Mesh cleanMesh(const Mesh& mesh, const CleanSettings& settings, CleanReport& rep
 
   Mesh out;
   std::vector<std::uint32_t> newIndex(rounded.size(), std::numeric_limits<std::uint32_t>::max());
-  std::unordered_set<std::array<std::uint32_t, 3>, TriangleHash> seen;
-  seen.reserve(mesh.triangles.size());
+  FlatMap<TriangleKey, bool, TriangleHash> seen(mesh.triangles.size());
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     const std::uint32_t surface = mesh.triangleSurfaces.empty() ? 0 : mesh.triangleSurfaces[t];
     if (surface >= names.size())
@@ -202,7 +281,8 @@ Mesh cleanMesh(const Mesh& mesh, const CleanSettings& settings, CleanReport& rep
       ++report.droppedDegenerate;
       continue;
     }
-    if (!seen.insert(canonicalRotation(tri)).second) {
+    const std::array<std::uint32_t, 3> rotated = canonicalRotation(tri);
+    if (!seen.tryEmplace({rotated[0], rotated[1], rotated[2]}, true).second) {
       ++report.droppedDuplicate;
       continue;
     }

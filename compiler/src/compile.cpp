@@ -88,9 +88,13 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
   // dropping covered faces opens them.
   say(settings, kTreeFirstPercent, "drop covered and buried faces");
   std::vector<bool> keep(cleaned.triangles.size(), true);
+  // Both rules turn about the same edges: found once, counted as edges.
+  std::optional<SolidEdges> solidEdges;
+  if (settings.dropCoveredFaces || settings.dropBuriedFaces)
+    timed(report.seconds.edges, report.cpuSeconds.edges, [&] { solidEdges.emplace(cleaned); });
   if (settings.dropCoveredFaces) {
     const std::vector<bool> covered = timed(report.seconds.edges, report.cpuSeconds.edges,
-                                            [&] { return findCoveredFaces(cleaned); });
+                                            [&] { return findCoveredFaces(*solidEdges); });
     for (std::size_t t = 0; t < keep.size(); ++t) {
       keep[t] = !covered[t];
       report.edges.droppedCovered += covered[t];
@@ -98,7 +102,7 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
   }
   if (settings.dropBuriedFaces) {
     const std::vector<bool> buried = timed(report.seconds.buried, report.cpuSeconds.buried, [&] {
-      return findBuriedFaces(cleaned, report.buried, threads);
+      return findBuriedFaces(*solidEdges, report.buried, threads);
     });
     for (std::size_t t = 0; t < keep.size(); ++t)
       if (buried[t] && keep[t]) {
@@ -107,6 +111,7 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
       }
   }
   // With both rules off the cleaned mesh as it is, vertex order included.
+  solidEdges.reset();
   const bool dropsAny = settings.dropCoveredFaces || settings.dropBuriedFaces;
   const Mesh clean = timed(report.seconds.edges, report.cpuSeconds.edges,
                            [&] { return dropsAny ? keepTriangles(cleaned, keep) : cleaned; });

@@ -3,10 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <numbers>
+#include <numeric>
 #include <span>
 #include <tuple>
-#include <unordered_map>
+
+#include "flat_map.h"
 
 namespace bspc {
 
@@ -33,14 +36,44 @@ struct EdgeUse {
 class EdgeMap {
  public:
   explicit EdgeMap(const Mesh& mesh) {
-    uses_.reserve(mesh.triangles.size() * 3);
+    // Sorted in two steps, cheaper than one sort of them all: counted into
+    // runs by low vertex, then each run sorted.
+    constexpr std::ptrdiff_t kShortRun = 16;
+    auto use = [&](std::uint32_t t, int k) {
+      const std::uint32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
+      return EdgeUse{std::min(a, b), std::max(a, b), t, k};
+    };
+    std::uint32_t vertexCount = 0;
+    for (const auto& tri : mesh.triangles)
+      for (const std::uint32_t v : tri) vertexCount = std::max(vertexCount, v + 1);
+    std::vector<std::size_t> runStart(std::size_t(vertexCount) + 1, 0);
+    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k) ++runStart[use(t, k).low + 1];
+    std::partial_sum(runStart.begin(), runStart.end(), runStart.begin());
+    uses_.resize(mesh.triangles.size() * 3);
+    std::vector<std::size_t> next(runStart.begin(), runStart.end() - 1);
     for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
       for (int k = 0; k < 3; ++k) {
-        const std::uint32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
-        uses_.push_back({std::min(a, b), std::max(a, b), t, k});
+        const EdgeUse u = use(t, k);
+        uses_[next[u.low]++] = u;
       }
-    std::sort(uses_.begin(), uses_.end(),
-              [](const EdgeUse& x, const EdgeUse& y) { return x.key() < y.key(); });
+    // A run is in (triangle, k) order as filled: sorted on the high vertex
+    // alone, stably (insertion, for the short runs of most vertices), it is
+    // in (high, triangle, k) order.
+    for (std::uint32_t v = 0; v < vertexCount; ++v) {
+      const auto first = uses_.begin() + runStart[v], last = uses_.begin() + runStart[v + 1];
+      if (last - first > kShortRun) {
+        std::sort(first, last,
+                  [](const EdgeUse& x, const EdgeUse& y) { return x.key() < y.key(); });
+        continue;
+      }
+      for (auto it = first + (first != last); it < last; ++it) {
+        const EdgeUse moving = *it;
+        auto hole = it;
+        for (; hole != first && (hole - 1)->high > moving.high; --hole) *hole = *(hole - 1);
+        *hole = moving;
+      }
+    }
     group_.assign(mesh.triangles.size(), {});
     for (std::size_t i = 0; i < uses_.size();) {
       std::size_t j = i;
@@ -64,25 +97,28 @@ class EdgeMap {
 struct Geometry {
   const Mesh& mesh;
   std::vector<V3> normal;
+  // Per triangle, edge k: the unit direction in its plane, perpendicular to
+  // the edge, pointing into it. Once each: turning about an edge needs it for
+  // every face around.
+  std::vector<std::array<V3, 3>> inward;
   explicit Geometry(const Mesh& m) : mesh(m) {
     normal.reserve(m.triangles.size());
     for (const auto& t : m.triangles)
       normal.push_back((m.vertices[t[1]] - m.vertices[t[0]])
                            .cross(m.vertices[t[2]] - m.vertices[t[0]])
                            .normalized());
+    inward.resize(m.triangles.size());
+    for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k)
+        inward[t][k] = normal[t].cross(corner(t, k + 1) - corner(t, k)).normalized();
   }
   const V3& corner(std::uint32_t t, int k) const { return mesh.vertices[mesh.triangles[t][k % 3]]; }
-  // The unit direction in triangle t's plane, perpendicular to its edge k,
-  // pointing into t.
-  V3 inward(std::uint32_t t, int k) const {
-    return normal[t].cross(corner(t, k + 1) - corner(t, k)).normalized();
-  }
   // The angle, in [0, 2 pi), from triangle t (turning through `side`, t's
   // normal or its opposite) to triangle u about their shared edge (t's edge
   // k, u's edge j).
   double turn(std::uint32_t t, int k, const V3& side, std::uint32_t u, int j) const {
-    const V3 w = inward(u, j);
-    double angle = std::atan2(w.dot(side), w.dot(inward(t, k)));
+    const V3& w = inward[u][j];
+    double angle = std::atan2(w.dot(side), w.dot(inward[t][k]));
     if (angle < 0) angle += 2 * std::numbers::pi;
     return angle;
   }
@@ -118,6 +154,16 @@ Turn firstTurn(const Geometry& g, const EdgeMap& edges, std::uint32_t t, int k, 
   return best;
 }
 
+// Per triangle, edge k: the face first met turning about the edge from the
+// triangle's back (firstTurn through -normal), into its solid.
+using BackTurns = std::vector<std::array<Turn, 3>>;
+BackTurns backTurns(const Geometry& g, const EdgeMap& edges) {
+  BackTurns back(g.mesh.triangles.size());
+  for (std::uint32_t t = 0; t < back.size(); ++t)
+    for (int k = 0; k < 3; ++k) back[t][k] = firstTurn(g, edges, t, k, -g.normal[t]);
+  return back;
+}
+
 // Triangles with the same three corners as t wound the other way.
 bool hasTwin(const Mesh& mesh, const EdgeMap& edges, std::uint32_t t) {
   const auto& tri = mesh.triangles[t];
@@ -135,15 +181,16 @@ bool hasTwin(const Mesh& mesh, const EdgeMap& edges, std::uint32_t t) {
 // (under 180 degrees) and has no twin (is not one side of a two-sided
 // surface), or continues the plane and is itself backed. Decided by a fixed point: a plane of
 // coplanar triangles is backed only if its rim is.
-std::vector<bool> solidBehind(const Geometry& g, const EdgeMap& edges) {
+std::vector<bool> solidBehind(const Geometry& g, const EdgeMap& edges, const BackTurns& back) {
   const std::size_t n = g.mesh.triangles.size();
   std::vector<bool> twin(n);
   for (std::uint32_t t = 0; t < n; ++t) twin[t] = hasTwin(g.mesh, edges, t);
   std::vector<bool> backed(n, true);
-  std::vector<std::vector<std::uint32_t>> dependsOn(n);
+  // (u, t): t is backed only if u is. One list, not a list per triangle.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> reliance;
   for (std::uint32_t t = 0; t < n; ++t) {
     for (int k = 0; k < 3 && backed[t]; ++k) {
-      const Turn first = firstTurn(g, edges, t, k, -g.normal[t]);
+      const Turn& first = back[t][k];
       const bool found = first.triangle != t;
       if (!found || !g.consistent(t, k, first.triangle, first.k) || first.angle < kAngleTolerance ||
           first.angle > std::numbers::pi + kAngleTolerance) {
@@ -155,23 +202,26 @@ std::vector<bool> solidBehind(const Geometry& g, const EdgeMap& edges) {
         if (g.normal[t].dot(g.normal[first.triangle]) <= 0)
           backed[t] = false;
         else
-          dependsOn[t].push_back(first.triangle);
+          reliance.push_back({first.triangle, t});
       }
     }
   }
   // Unbacked triangles unback those that rely on them, through the chain
   // (a worklist: linear however long the chains of coplanar triangles).
-  std::vector<std::vector<std::uint32_t>> reliedOnBy(n);
-  for (std::uint32_t t = 0; t < n; ++t)
-    for (const std::uint32_t u : dependsOn[t]) reliedOnBy[u].push_back(t);
+  // Those relying on u: reliedOnBy[reliedStart[u], reliedStart[u + 1]).
+  std::vector<std::uint32_t> reliedStart(n + 1, 0), reliedOnBy(reliance.size());
+  for (const auto& [u, t] : reliance) ++reliedStart[u + 1];
+  std::partial_sum(reliedStart.begin(), reliedStart.end(), reliedStart.begin());
+  std::vector<std::uint32_t> next(reliedStart.begin(), reliedStart.end() - 1);
+  for (const auto& [u, t] : reliance) reliedOnBy[next[u]++] = t;
   std::vector<std::uint32_t> pending;
   for (std::uint32_t t = 0; t < n; ++t)
     if (!backed[t]) pending.push_back(t);
   while (!pending.empty()) {
     const std::uint32_t u = pending.back();
     pending.pop_back();
-    for (const std::uint32_t t : reliedOnBy[u])
-      if (backed[t]) {
+    for (std::uint32_t i = reliedStart[u]; i < reliedStart[u + 1]; ++i)
+      if (const std::uint32_t t = reliedOnBy[i]; backed[t]) {
         backed[t] = false;
         pending.push_back(t);
       }
@@ -185,20 +235,89 @@ struct PlaneKey {
   std::int64_t nx, ny, nz, d;
   bool operator==(const PlaneKey&) const = default;
 };
-struct PlaneKeyHash {
-  std::size_t operator()(const PlaneKey& k) const {
-    std::uint64_t h = std::uint64_t(k.nx) * 0x9E3779B97F4A7C15ull;
-    h ^= std::uint64_t(k.ny) * 0xC2B2AE3D27D4EB4Full + (h << 6) + (h >> 2);
-    h ^= std::uint64_t(k.nz) * 0x165667B19E3779F9ull + (h << 6) + (h >> 2);
-    h ^= std::uint64_t(k.d) * 0x27D4EB2F165667C5ull + (h << 6) + (h >> 2);
-    return std::size_t(h);
-  }
-};
 constexpr double kNormalStep = 1e-3, kDistanceStep = 1e-2;
 PlaneKey planeKey(const V3& n, double d) {
   return {std::llround(n.x() / kNormalStep), std::llround(n.y() / kNormalStep),
           std::llround(n.z() / kNormalStep), std::llround(d / kDistanceStep)};
 }
+
+// The backed triangles by plane bucket. A face looks in the 81 buckets
+// around its own; most are empty, so they are found as 27 normal buckets
+// (one hash lookup each, made once per normal bucket asked about: the
+// faces of a level share few) whose triangles are sorted by distance
+// bucket (a binary search for the three wanted).
+class PlaneBuckets {
+ public:
+  struct Entry {
+    PlaneKey key;
+    std::uint32_t triangle;
+    Eigen::AlignedBox3d box;
+  };
+
+  explicit PlaneBuckets(std::vector<Entry> entries) : entries_(std::move(entries)) {
+    std::sort(entries_.begin(), entries_.end(), [](const Entry& x, const Entry& y) {
+      return std::tie(x.key.nx, x.key.ny, x.key.nz, x.key.d, x.triangle) <
+             std::tie(y.key.nx, y.key.ny, y.key.nz, y.key.d, y.triangle);
+    });
+    for (std::uint32_t i = 0; i < entries_.size();) {
+      std::uint32_t j = i;
+      while (j < entries_.size() && sameNormal(entries_[j].key, entries_[i].key)) ++j;
+      runs_.tryEmplace(normalOf(entries_[i].key), {i, j});
+      i = j;
+    }
+  }
+
+  // Calls visit(entry) for every entry whose bucket is within one step of
+  // `home` in each of its four numbers, in no particular order.
+  template <typename Visit>
+  void forNeighbours(const PlaneKey& home, Visit&& visit) {
+    const auto [known, added] = around_.tryEmplace(normalOf(home), {});
+    if (added) {
+      const auto first = static_cast<std::uint32_t>(aroundRuns_.size());
+      for (std::int64_t dx = -1; dx <= 1; ++dx)
+        for (std::int64_t dy = -1; dy <= 1; ++dy)
+          for (std::int64_t dz = -1; dz <= 1; ++dz)
+            if (const Run* run = runs_.find({home.nx + dx, home.ny + dy, home.nz + dz}))
+              aroundRuns_.push_back(*run);
+      *known = {first, static_cast<std::uint32_t>(aroundRuns_.size())};
+    }
+    for (std::uint32_t r = known->first; r < known->second; ++r) {
+      const auto first = entries_.begin() + aroundRuns_[r].first,
+                 last = entries_.begin() + aroundRuns_[r].second;
+      for (auto it =
+               std::lower_bound(first, last, home.d - 1,
+                                [](const Entry&entry, std::int64_t d) { return entry.key.d < d; });
+           it != last && it->key.d <= home.d + 1; ++it)
+        visit(*it);
+    }
+  }
+
+ private:
+  struct NormalKey {
+    std::int64_t nx, ny, nz;
+    bool operator==(const NormalKey&) const = default;
+  };
+  struct NormalKeyHash {
+    std::uint64_t operator()(const NormalKey& k) const {
+      std::uint64_t h = std::uint64_t(k.nx);
+      h = (h ^ (h >> 29)) * 0xBF58476D1CE4E5B9ull + std::uint64_t(k.ny);
+      h = (h ^ (h >> 29)) * 0xBF58476D1CE4E5B9ull + std::uint64_t(k.nz);
+      return h ^ (h >> 32);
+    }
+  };
+  static NormalKey normalOf(const PlaneKey& k) { return {k.nx, k.ny, k.nz}; }
+  static bool sameNormal(const PlaneKey& a, const PlaneKey& b) {
+    return a.nx == b.nx && a.ny == b.ny && a.nz == b.nz;
+  }
+
+  // A range of entries_ (one normal bucket's), or of aroundRuns_.
+  using Run = std::pair<std::uint32_t, std::uint32_t>;
+  std::vector<Entry> entries_;
+  FlatMap<NormalKey, Run, NormalKeyHash> runs_;
+  // Per normal bucket asked about: the runs of the buckets around it.
+  FlatMap<NormalKey, Run, NormalKeyHash> around_;
+  std::vector<Run> aroundRuns_;
+};
 
 using Polygon = std::vector<V2>;
 
@@ -232,30 +351,62 @@ void split(const Polygon& p, const V2& a, const V2& along, double margin, Polygo
   }
 }
 
+// Convex polygons end to end in one array, so clipping many of them makes
+// no allocation per polygon.
+class Polygons {
+ public:
+  std::size_t size() const { return ends_.size(); }
+  std::span<const V2> operator[](std::size_t i) const {
+    const std::size_t first = i == 0 ? 0 : ends_[i - 1];
+    return {points_.data() + first, ends_[i] - first};
+  }
+  void push_back(std::span<const V2> polygon) {
+    points_.insert(points_.end(), polygon.begin(), polygon.end());
+    ends_.push_back(points_.size());
+  }
+  void clear() { points_.clear(), ends_.clear(); }
+  bool empty() const { return ends_.empty(); }
+
+ private:
+  std::vector<V2> points_;
+  std::vector<std::size_t> ends_;
+};
+
+// What covered() clips with, kept from face to face so that it allocates
+// only when a face needs more room than any before it.
+struct ClipScratch {
+  Polygons left, next;
+  Polygon piece, inside, outside;
+};
+
 // Whether triangle f is covered by the union of triangles `cover` (all in
 // its plane, facing the other way), each grown by 0.1 mm.
-bool covered(const Geometry& g, std::uint32_t f, const std::vector<std::uint32_t>& cover) {
+bool covered(const Geometry& g, std::uint32_t f, const std::vector<std::uint32_t>& cover,
+             ClipScratch& scratch) {
   const V3 origin = g.corner(f, 0);
   const V3 u = (g.corner(f, 1) - origin).normalized();
   const V3 v = g.normal[f].cross(u);
   auto flat = [&](const V3& p) { return V2((p - origin).dot(u), (p - origin).dot(v)); };
-  std::vector<Polygon> left{{flat(g.corner(f, 0)), flat(g.corner(f, 1)), flat(g.corner(f, 2))}};
+  auto& [left, next, piece, inside, outside] = scratch;
+  left.clear();
+  left.push_back(std::array{flat(g.corner(f, 0)), flat(g.corner(f, 1)), flat(g.corner(f, 2))});
   constexpr double kMargin = 1e-4, kLeftArea = 1e-8;
   constexpr std::size_t kMaxPieces = 256;
-  Polygon inside, outside;
   for (const std::uint32_t c : cover) {
     Polygon shape{flat(g.corner(c, 0)), flat(g.corner(c, 1)), flat(g.corner(c, 2))};
     if (area(shape) < 0) std::reverse(shape.begin(), shape.end());
-    std::vector<Polygon> next;
-    for (Polygon piece : left) {
+    next.clear();
+    for (std::size_t i = 0; i < left.size(); ++i) {
+      piece.assign(left[i].begin(), left[i].end());
       for (int e = 0; e < 3 && !piece.empty(); ++e) {
         const V2 along = (shape[(e + 1) % 3] - shape[e]).normalized();
         split(piece, shape[e], along, kMargin, inside, outside);
         if (outside.size() >= 3 && std::abs(area(outside)) > kLeftArea) next.push_back(outside);
-        piece = inside.size() >= 3 ? inside : Polygon{};
+        std::swap(piece, inside);
+        if (piece.size() < 3) piece.clear();
       }
     }
-    left = std::move(next);
+    std::swap(left, next);
     if (left.empty()) return true;
     if (left.size() > kMaxPieces) return false;
   }
@@ -264,23 +415,41 @@ bool covered(const Geometry& g, std::uint32_t f, const std::vector<std::uint32_t
 
 }  // namespace
 
-std::vector<bool> findCoveredFaces(const Mesh& mesh) {
-  const Geometry g(mesh);
-  const EdgeMap edges(mesh);
-  const std::vector<bool> backed = solidBehind(g, edges);
-  const std::size_t n = mesh.triangles.size();
+struct SolidEdges::Parts {
+  Geometry geometry;
+  EdgeMap edges;
+  BackTurns back;
+  explicit Parts(const Mesh& mesh)
+      : geometry(mesh), edges(mesh), back(backTurns(geometry, edges)) {}
+};
 
-  std::unordered_map<PlaneKey, std::vector<std::uint32_t>, PlaneKeyHash> planes;
-  for (std::uint32_t t = 0; t < n; ++t)
-    if (backed[t]) planes[planeKey(g.normal[t], g.normal[t].dot(g.corner(t, 0)))].push_back(t);
+SolidEdges::SolidEdges(const Mesh& mesh) : parts_(std::make_unique<const Parts>(mesh)) {}
+SolidEdges::~SolidEdges() = default;
+const Mesh& SolidEdges::mesh() const { return parts_->geometry.mesh; }
+
+std::vector<bool> findCoveredFaces(const Mesh& mesh) { return findCoveredFaces(SolidEdges(mesh)); }
+
+std::vector<bool> findCoveredFaces(const SolidEdges& solid) {
+  const Geometry& g = solid.parts().geometry;
+  const Mesh& mesh = g.mesh;
+  const std::vector<bool> backed = solidBehind(g, solid.parts().edges, solid.parts().back);
+  const std::size_t n = mesh.triangles.size();
 
   auto bounds = [&](std::uint32_t t) {
     Eigen::AlignedBox3d box;
     for (int k = 0; k < 3; ++k) box.extend(g.corner(t, k));
     return box;
   };
+  std::vector<PlaneBuckets::Entry> backedEntries;
+  for (std::uint32_t t = 0; t < n; ++t)
+    if (backed[t])
+      backedEntries.push_back(
+          {planeKey(g.normal[t], g.normal[t].dot(g.corner(t, 0))), t, bounds(t)});
+  PlaneBuckets planes(std::move(backedEntries));
+
   std::vector<bool> drop(n, false);
   std::vector<std::uint32_t> cover;
+  ClipScratch scratch;
   for (std::uint32_t f = 0; f < n; ++f) {
     const V3 opposite = -g.normal[f];
     const double d = opposite.dot(g.corner(f, 0));
@@ -291,29 +460,23 @@ std::vector<bool> findCoveredFaces(const Mesh& mesh) {
     const double tolerance = 1e-4 + 1e-6 * scale;
     box.min().array() -= tolerance, box.max().array() += tolerance;
     cover.clear();
-    for (std::int64_t dx = -1; dx <= 1; ++dx)
-      for (std::int64_t dy = -1; dy <= 1; ++dy)
-        for (std::int64_t dz = -1; dz <= 1; ++dz)
-          for (std::int64_t dd = -1; dd <= 1; ++dd) {
-            const auto it = planes.find({home.nx + dx, home.ny + dy, home.nz + dz, home.d + dd});
-            if (it == planes.end()) continue;
-            for (const std::uint32_t c : it->second) {
-              if (c == f || g.normal[c].dot(opposite) < 1 - 2e-7) continue;
-              if (!box.intersects(bounds(c))) continue;
-              bool inPlane = true;
-              for (int k = 0; k < 3; ++k)
-                inPlane = inPlane &&
-                          std::abs(g.normal[c].dot(g.corner(f, k) - g.corner(c, 0))) <= tolerance &&
-                          std::abs(g.normal[f].dot(g.corner(c, k) - g.corner(f, 0))) <= tolerance;
-              if (inPlane) cover.push_back(c);
-            }
-          }
+    planes.forNeighbours(home, [&](const PlaneBuckets::Entry& entry) {
+      const std::uint32_t c = entry.triangle;
+      if (c == f || g.normal[c].dot(opposite) < 1 - 2e-7) return;
+      if (!box.intersects(entry.box)) return;
+      bool inPlane = true;
+      for (int k = 0; k < 3; ++k)
+        inPlane = inPlane &&
+                  std::abs(g.normal[c].dot(g.corner(f, k) - g.corner(c, 0))) <= tolerance &&
+                  std::abs(g.normal[f].dot(g.corner(c, k) - g.corner(f, 0))) <= tolerance;
+      if (inPlane) cover.push_back(c);
+    });
     // Many overlapping faces in one plane (hostile input): keep the face
     // rather than clip it against them all.
     constexpr std::size_t kMaxCover = 64;
     if (cover.empty() || cover.size() > kMaxCover) continue;
     std::sort(cover.begin(), cover.end());
-    drop[f] = covered(g, f, cover);
+    drop[f] = covered(g, f, cover, scratch);
   }
 
   return drop;
@@ -330,10 +493,14 @@ Mesh dropCoveredFaces(const Mesh& mesh, EdgeReport& report) {
 }
 
 std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const Mesh& mesh) {
+  return solidNeighbours(SolidEdges(mesh));
+}
+
+std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const SolidEdges& solid) {
   constexpr std::uint32_t kNone = ~std::uint32_t(0);
-  const std::size_t n = mesh.triangles.size();
-  const Geometry g(mesh);
-  const EdgeMap edges(mesh);
+  const Geometry& g = solid.parts().geometry;
+  const EdgeMap& edges = solid.parts().edges;
+  const std::size_t n = g.mesh.triangles.size();
   // Each edge's candidate: the other triangle of a two-triangle edge, or the
   // first face turning from the triangle's back into its solid; kept when
   // it runs the other way along the edge.
@@ -346,7 +513,7 @@ std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const Mesh& mesh) {
         const EdgeUse& other = around[0].triangle == t ? around[1] : around[0];
         found = {other.triangle, other.k};
       } else if (around.size() > 2) {
-        const Turn first = firstTurn(g, edges, t, k, -g.normal[t]);
+        const Turn& first = solid.parts().back[t][k];
         if (first.triangle != t) found = {first.triangle, first.k};
       }
       if (found.first != kNone && !g.consistent(t, k, found.first, found.second))

@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <span>
 #include <sstream>
-#include <unordered_map>
 
 namespace bspc {
 
@@ -30,33 +30,62 @@ class Pieces {
   std::vector<std::uint32_t> parent_;
 };
 
-std::uint64_t edgeKey(std::uint32_t from, std::uint32_t to) {
-  return std::uint64_t(from) << 32 | to;
-}
+// Every directed triangle edge, by its first vertex (a counting sort), then
+// its second, then triangle: a few bytes an edge, and no hashing.
+class DirectedEdges {
+ public:
+  struct Use {
+    std::uint32_t to, triangle;
+  };
+
+  explicit DirectedEdges(const Mesh& mesh) {
+    std::uint32_t vertexCount = 0;
+    for (const auto& tri : mesh.triangles)
+      for (const std::uint32_t v : tri) vertexCount = std::max(vertexCount, v + 1);
+    start_.assign(std::size_t(vertexCount) + 1, 0);
+    for (const auto& tri : mesh.triangles)
+      for (const std::uint32_t v : tri) ++start_[v + 1];
+    std::partial_sum(start_.begin(), start_.end(), start_.begin());
+    uses_.resize(start_.back());
+    std::vector<std::size_t> next(start_.begin(), start_.end() - 1);
+    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k)
+        uses_[next[mesh.triangles[t][k]]++] = {mesh.triangles[t][(k + 1) % 3], t};
+    for (std::uint32_t v = 0; v < vertexCount; ++v)
+      std::sort(uses_.begin() + start_[v], uses_.begin() + start_[v + 1],
+                [](const Use& x, const Use& y) {
+                  return x.to < y.to || (x.to == y.to && x.triangle < y.triangle);
+                });
+  }
+
+  // The uses of edge from -> to, in triangle order.
+  std::span<const Use> uses(std::uint32_t from, std::uint32_t to) const {
+    if (std::size_t(from) + 1 >= start_.size()) return {};
+    const auto first = uses_.begin() + start_[from], last = uses_.begin() + start_[from + 1];
+    const auto [low, high] = std::equal_range(
+        first, last, Use{to, 0}, [](const Use& x, const Use& y) { return x.to < y.to; });
+    return {low, high};
+  }
+
+ private:
+  std::vector<std::size_t> start_;
+  std::vector<Use> uses_;
+};
 
 }  // namespace
 
 ClosedPieces findClosedPieces(const Mesh& mesh) {
   const std::size_t n = mesh.triangles.size();
-  // Each directed edge, with the triangle using it, and how often it is used.
-  std::unordered_map<std::uint64_t, std::uint32_t> firstUser, uses;
-  firstUser.reserve(3 * n);
-  uses.reserve(3 * n);
-  for (std::uint32_t t = 0; t < n; ++t)
-    for (int k = 0; k < 3; ++k) {
-      const std::uint64_t key = edgeKey(mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3]);
-      firstUser.emplace(key, t);
-      ++uses[key];
-    }
+  const DirectedEdges edges(mesh);
   // An edge pairs two triangles when it is used once in each direction.
   std::vector<std::array<std::uint32_t, 3>> across(
       n, {ClosedPieces::kOpen, ClosedPieces::kOpen, ClosedPieces::kOpen});
   for (std::uint32_t t = 0; t < n; ++t)
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
-      const auto reverse = uses.find(edgeKey(b, a));
-      if (reverse != uses.end() && reverse->second == 1 && uses[edgeKey(a, b)] == 1)
-        across[t][k] = firstUser[edgeKey(b, a)];
+      const auto reverse = edges.uses(b, a);
+      if (reverse.size() == 1 && edges.uses(a, b).size() == 1)
+        across[t][k] = reverse.front().triangle;
     }
   return findClosedPieces(mesh, std::move(across));
 }

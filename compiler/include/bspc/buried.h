@@ -5,6 +5,7 @@
 // body can touch").
 #pragma once
 
+#include <bspc/edges.h>
 #include <bspc/mesh.h>
 #include <bspf/thread_pool.h>
 
@@ -46,6 +47,10 @@ struct BuriedReport {
 /// With a pool, the triangles are shared between its threads; the result is
 /// the same on any number of threads. O(n log n) for a mesh of brushes.
 std::vector<bool> findBuriedFaces(const Mesh& mesh, BuriedReport& report,
+                                  bspf::ThreadPool* pool = nullptr);
+/// The same for edges.mesh(), from edges found once for this and
+/// findCoveredFaces.
+std::vector<bool> findBuriedFaces(const SolidEdges& edges, BuriedReport& report,
                                   bspf::ThreadPool* pool = nullptr);
 
 }  // namespace bspc

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace bspc {
@@ -46,8 +47,29 @@ struct EdgeReport {
 /// order. Precondition: a cleaned mesh (welded, no degenerate triangle).
 Mesh dropCoveredFaces(const Mesh& mesh, EdgeReport& report);
 
+/// A cleaned mesh's triangle edges, grouped by their pair of vertices, and
+/// for each triangle edge the face first met turning about it from the
+/// triangle's back: what findCoveredFaces and solidNeighbours (so
+/// findBuriedFaces) both work from, found once for both. Refers to `mesh`,
+/// which must outlive it.
+class SolidEdges {
+ public:
+  explicit SolidEdges(const Mesh& mesh);
+  SolidEdges(const SolidEdges&) = delete;
+  SolidEdges& operator=(const SolidEdges&) = delete;
+  ~SolidEdges();
+  const Mesh& mesh() const;
+  /// What it holds: private to edges.cpp.
+  struct Parts;
+  const Parts& parts() const { return *parts_; }
+
+ private:
+  std::unique_ptr<const Parts> parts_;
+};
+
 /// Per triangle: whether dropCoveredFaces drops it.
 std::vector<bool> findCoveredFaces(const Mesh& mesh);
+std::vector<bool> findCoveredFaces(const SolidEdges& edges);
 
 /// Per triangle, edge k (corner k to corner k + 1): the triangle across it
 /// that closes the same solid, or ~0u. Across an edge of two triangles, the
@@ -58,6 +80,7 @@ std::vector<bool> findCoveredFaces(const Mesh& mesh);
 /// closed surfaces (findClosedPieces in mesh_checks.h). Precondition: a
 /// cleaned mesh.
 std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const Mesh& mesh);
+std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const SolidEdges& edges);
 
 /// A triangle's three edges (edge k from corner k to corner k + 1).
 struct TriangleEdges {
