@@ -281,12 +281,11 @@ class PlaneBuckets {
               aroundRuns_.push_back(*run);
       *known = {first, static_cast<std::uint32_t>(aroundRuns_.size())};
     }
+    const auto nearerThan = [](const Entry& entry, std::int64_t d) { return entry.key.d < d; };
     for (std::uint32_t r = known->first; r < known->second; ++r) {
       const auto first = entries_.begin() + aroundRuns_[r].first,
                  last = entries_.begin() + aroundRuns_[r].second;
-      for (auto it =
-               std::lower_bound(first, last, home.d - 1,
-                                [](const Entry&entry, std::int64_t d) { return entry.key.d < d; });
+      for (auto it = std::lower_bound(first, last, home.d - 1, nearerThan);
            it != last && it->key.d <= home.d + 1; ++it)
         visit(*it);
     }
