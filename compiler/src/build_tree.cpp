@@ -29,42 +29,52 @@ struct Split {
 struct Box {
   Eigen::Vector3d low, high;
 
-  // The box around the part of this box on one side of a plane.
-  Box clipped(const Split& split, bool keepFront) const {
+  // The boxes around the parts of this box in front of and behind a plane,
+  // from one evaluation of the corners' signed distances (a distance from
+  // the back is the front's negated, exactly).
+  std::pair<Box, Box> clippedBoth(const Split& split) const {
     const Eigen::Vector3d n = split.normal.cast<double>();
-    const double sign = keepFront ? 1.0 : -1.0;
     for (int axis = 0; axis < 3; ++axis)
       if (std::abs(n[axis]) == 1.0 && n[(axis + 1) % 3] == 0.0 && n[(axis + 2) % 3] == 0.0)
-        return clippedOnAxis(axis, n[axis], split.distance, sign);
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-    Eigen::Vector3d hi = -lo;
-    auto corner = [&](int i) {
-      return Eigen::Vector3d(i & 1 ? high.x() : low.x(), i & 2 ? high.y() : low.y(),
-                             i & 4 ? high.z() : low.z());
-    };
-    auto add = [&](const Eigen::Vector3d& p) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    };
-    double side[8];
+        return {clippedOnAxis(axis, n[axis], split.distance, 1.0),
+                clippedOnAxis(axis, n[axis], split.distance, -1.0)};
+    Eigen::Vector3d corners[8];
+    double along[8];
     for (int i = 0; i < 8; ++i) {
-      side[i] = sign * (n.dot(corner(i)) - split.distance);
-      if (side[i] >= 0) add(corner(i));
+      corners[i] = Eigen::Vector3d(i & 1 ? high.x() : low.x(), i & 2 ? high.y() : low.y(),
+                                   i & 4 ? high.z() : low.z());
+      along[i] = n.dot(corners[i]) - split.distance;
     }
-    for (int i = 0; i < 8; ++i)
-      for (int axis = 0; axis < 3; ++axis) {
-        const int j = i | (1 << axis);
-        if (j == i || (side[i] >= 0) == (side[j] >= 0)) continue;
-        const double t = side[i] / (side[i] - side[j]);
-        add(corner(i) + t * (corner(j) - corner(i)));
+    Box boxes[2];
+    for (int keep = 0; keep < 2; ++keep) {
+      const double sign = keep == 0 ? 1.0 : -1.0;
+      Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+      Eigen::Vector3d hi = -lo;
+      auto add = [&](const Eigen::Vector3d& p) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      };
+      double side[8];
+      for (int i = 0; i < 8; ++i) {
+        side[i] = sign * along[i];
+        if (side[i] >= 0) add(corners[i]);
       }
-    if (!(lo.array() <= hi.array()).all()) return {low, low};  // nothing on that side
-    return {lo, hi};
+      for (int i = 0; i < 8; ++i)
+        for (int axis = 0; axis < 3; ++axis) {
+          const int j = i | (1 << axis);
+          if (j == i || (side[i] >= 0) == (side[j] >= 0)) continue;
+          const double t = side[i] / (side[i] - side[j]);
+          add(corners[i] + t * (corners[j] - corners[i]));
+        }
+      // Empty: nothing on that side.
+      boxes[keep] = (lo.array() <= hi.array()).all() ? Box{lo, hi} : Box{low, low};
+    }
+    return {boxes[0], boxes[1]};
   }
 
-  // clipped for a normal along `axis` (`direction` +1 or -1): the general
-  // case's arithmetic on the one edge direction that can cross the plane,
-  // so the same box to the bit. The corners' other coordinates are exact.
+  // clippedBoth's box on one side (`sign` +1 front, -1 back) for a normal along `axis` (`direction`
+  // +1 or -1): the general case's arithmetic on the one edge direction that can cross the plane, so
+  // the same box to the bit. The corners' other coordinates are exact.
   Box clippedOnAxis(int axis, double direction, double distance, double sign) const {
     const double sideLow = sign * (direction * low[axis] - distance);
     const double sideHigh = sign * (direction * high[axis] - distance);
@@ -109,8 +119,10 @@ struct Lists {
 // a small fraction of the on-plane tolerance), the face normal, and each
 // axis's lowest and highest corner. A candidate is then counted in one pass
 // over contiguous memory, four triangles at a time. The counts only guide
-// the choice of a split: partition classifies in double, from the mesh,
-// and a split that leaves every triangle on one side there is refused
+// the choice of a split; partition classifies from them only the triangles
+// whose float distances are further from every threshold than float's
+// error can reach (so exactly as in double), and the others in double,
+// from the mesh. A split that leaves every triangle on one side is refused
 // (buildNode). Float halves the memory the counting reads and doubles the
 // triangles an SSE instruction takes.
 struct Columns {
@@ -119,19 +131,24 @@ struct Columns {
   std::vector<float> low[3], high[3];
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   std::size_t size = 0;
+  // size rounded up to four: the lanes past the triangles hold NaN, which
+  // every comparison of the tally finds false, so a padded lane counts on
+  // no side and four at a time needs no one-by-one tail.
+  std::size_t padded = 0;
 
   void gather(const std::vector<std::uint32_t>& triangles, const Mesh& mesh,
               const std::vector<Eigen::Vector3d>& faceNormals, const Eigen::Vector3d& near) {
     size = triangles.size();
+    padded = (size + 3) & ~std::size_t(3);
     origin = near;
     // Only grown: a node smaller than an earlier one reuses the columns as they are.
-    if (normal[0].size() < size) {
+    if (normal[0].size() < padded) {
       for (auto& c : corner)
-        for (auto& axis : c) axis.resize(size);
+        for (auto& axis : c) axis.resize(padded);
       for (int axis = 0; axis < 3; ++axis) {
-        normal[axis].resize(size);
-        low[axis].resize(size);
-        high[axis].resize(size);
+        normal[axis].resize(padded);
+        low[axis].resize(padded);
+        high[axis].resize(padded);
       }
     }
     float* cornerOut[3][3];
@@ -163,6 +180,15 @@ struct Columns {
       fill(0);
       fill(1);
       fill(2);
+    }
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (int axis = 0; axis < 3; ++axis) {
+      for (std::size_t i = size; i < padded; ++i) {
+        for (int k = 0; k < 3; ++k) cornerOut[k][axis][i] = nan;
+        normalOut[axis][i] = nan;
+        lowOut[axis][i] = nan;
+        highOut[axis][i] = nan;
+      }
     }
   }
 };
@@ -200,8 +226,10 @@ struct TallySse2 {
     const __m128 reachesBack = _mm_or_ps(_mm_andnot_ps(facesFront, inPlane),
                                          _mm_andnot_ps(inPlane, _mm_cmplt_ps(lowest, above)));
     // A mask lane is all ones, -1 as an integer: subtracting counts it.
-    front = _mm_sub_epi32(front, _mm_castps_si128(_mm_andnot_ps(reachesBack, reachesFront)));
-    back = _mm_sub_epi32(back, _mm_castps_si128(_mm_andnot_ps(reachesFront, reachesBack)));
+    // `front` and `back` count all that reach the side; counts() takes
+    // those reaching both out.
+    front = _mm_sub_epi32(front, _mm_castps_si128(reachesFront));
+    back = _mm_sub_epi32(back, _mm_castps_si128(reachesBack));
     both = _mm_sub_epi32(both, _mm_castps_si128(_mm_and_ps(reachesFront, reachesBack)));
   }
   static std::size_t sum(__m128i v) {
@@ -209,7 +237,10 @@ struct TallySse2 {
     _mm_storeu_si128(reinterpret_cast<__m128i*>(lanes), v);
     return std::size_t(lanes[0]) + lanes[1] + lanes[2] + lanes[3];
   }
-  Counts counts() const { return {sum(front), sum(back), sum(both)}; }
+  Counts counts() const {
+    const std::size_t inBoth = sum(both);
+    return {sum(front) - inBoth, sum(back) - inBoth, inBoth};
+  }
 };
 #endif
 
@@ -258,15 +289,17 @@ Counts countSplit(const Columns& c, std::size_t begin, std::size_t end, const Ei
   for (; i + 4 <= end; i += 4) {
     __m128 lowest = _mm_set1_ps(std::numeric_limits<float>::infinity());
     __m128 highest = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+    // The offset subtracted after the lowest and highest are found: float
+    // subtraction is monotonic, so they are those of the differences.
     for (int k = 0; k < 3; ++k) {
-      const __m128 s =
-          _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(vx, _mm_loadu_ps(&c.corner[k][0][i])),
-                                           _mm_mul_ps(vy, _mm_loadu_ps(&c.corner[k][1][i]))),
-                                _mm_mul_ps(vz, _mm_loadu_ps(&c.corner[k][2][i]))),
-                     vd);
+      const __m128 s = _mm_add_ps(_mm_add_ps(_mm_mul_ps(vx, _mm_loadu_ps(&c.corner[k][0][i])),
+                                             _mm_mul_ps(vy, _mm_loadu_ps(&c.corner[k][1][i]))),
+                                  _mm_mul_ps(vz, _mm_loadu_ps(&c.corner[k][2][i])));
       lowest = _mm_min_ps(lowest, s);
       highest = _mm_max_ps(highest, s);
     }
+    lowest = _mm_sub_ps(lowest, vd);
+    highest = _mm_sub_ps(highest, vd);
     const __m128 facing = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(&c.normal[0][i]), vx),
                                                 _mm_mul_ps(_mm_loadu_ps(&c.normal[1][i]), vy)),
                                      _mm_mul_ps(_mm_loadu_ps(&c.normal[2][i]), vz));
@@ -420,7 +453,8 @@ class TreeBuilder {
         depth < settings_.maxDepth)
       split = chooseSplit(triangles, cell, scratch_.front(), pool_);
     Lists front, back;
-    if (!split || !partition(triangles, *split, front, back, scratch_.front().side)) {
+    if (!split || !partition(triangles, *split, scratch_.front().columns, front, back,
+                             scratch_.front().side)) {
       subtrees_.push_back({std::move(triangles), cell, depth, share, {}, -1});
       return -static_cast<std::int32_t>(subtrees_.size());
     }
@@ -428,9 +462,9 @@ class TreeBuilder {
     top_.push_back({*split});
     const double whole = double(front.size() + back.size());
     const double backShare = share * double(back.size()) / whole;
-    const Box backCell = cell.clipped(*split, false);
+    const auto [frontCell, backCell] = cell.clippedBoth(*split);
     const std::int32_t frontChild =
-        expand(front, cell.clipped(*split, true), depth + 1, share * double(front.size()) / whole);
+        expand(front, frontCell, depth + 1, share * double(front.size()) / whole);
     const std::int32_t backChild = expand(back, backCell, depth + 1, backShare);
     top_[std::size_t(index)].front = frontChild;
     top_[std::size_t(index)].back = backChild;
@@ -461,18 +495,20 @@ class TreeBuilder {
   // Splits `triangles` (emptied) into the two sides' lists, in their order;
   // `side` is working memory, one entry a mesh triangle. A triangle lying in
   // the plane goes to the side its normal faces; a corner within the
-  // tolerance of a side counts as reaching it. In double, from the mesh:
-  // a cell's lists are complete whatever float made of the counts. False,
-  // with `triangles` left as they were, when every triangle would reach one
-  // side: the split makes no progress (the float counts said it did, which
-  // only a triangle at the tolerance's edge can make them say).
-  bool partition(Lists& triangles, const Split& split, Lists& front, Lists& back,
-                 std::vector<std::uint8_t>& side) const {
+  // tolerance of a side counts as reaching it. In double, from the mesh, or
+  // equivalently from `columns` (the node's triangles in the order of
+  // `triangles`, gathered by chooseSplit) where float is provably
+  // decisive: a cell's lists are complete whatever float made of the
+  // counts. False, with `triangles` left as they were, when every triangle
+  // would reach one side: the split makes no progress (the float counts
+  // said it did, which only a triangle at the tolerance's edge can make
+  // them say).
+  bool partition(Lists& triangles, const Split& split, const Columns& columns, Lists& front,
+                 Lists& back, std::vector<std::uint8_t>& side) const {
     side.resize(mesh_.triangles.size());
     const double nx = split.normal.x(), ny = split.normal.y(), nz = split.normal.z();
     const double distance = split.distance, tolerance = onPlaneTolerance(split);
-    std::size_t toFront = 0, toBack = 0;
-    for (const std::uint32_t t : triangles.order) {
+    const auto classifyInDouble = [&](std::uint32_t t) {
       double lowest = std::numeric_limits<double>::infinity();
       double highest = -lowest;
       for (int k = 0; k < 3; ++k) {
@@ -486,9 +522,112 @@ class TreeBuilder {
       const bool inPlane = highest <= tolerance && lowest >= -tolerance;
       const bool reachesFront = inPlane ? facing >= 0 : highest > -tolerance;
       const bool reachesBack = inPlane ? facing < 0 : lowest < tolerance;
-      side[t] = std::uint8_t((reachesFront ? kFront : 0) | (reachesBack ? kBack : 0));
-      toFront += reachesFront;
-      toBack += reachesBack;
+      return std::uint8_t((reachesFront ? kFront : 0) | (reachesBack ? kBack : 0));
+    };
+    std::size_t toFront = 0, toBack = 0;
+    std::size_t i = 0;
+#ifdef __SSE2__
+    // A float signed distance differs from partition's double one by less
+    // than `error`: the corners' and the offset's rounding to float (half
+    // an ulp each), float's four operations on them, and double's rounding
+    // of the distance and of its own evaluation, all bounded generously.
+    // Where the lowest and highest distances are each further than that
+    // from the four thresholds (+-tolerance), every comparison comes out
+    // as in double; and a triangle in the plane whose float facing is
+    // further from 0 than the normal's rounding can move it faces the same
+    // side. Any other triangle is classified in double.
+    const double offset = distance - split.normal.cast<double>().dot(columns.origin);
+    const auto offsetFloat = static_cast<float>(offset);
+    const double unit = std::ldexp(1.0, -24);
+    // The largest distance of a corner from the origin along each axis.
+    double extent[3];
+    for (int axis = 0; axis < 3; ++axis) {
+      __m128 lowest = _mm_setzero_ps(), highest = _mm_setzero_ps();
+      for (std::size_t j = 0; j + 4 <= columns.size; j += 4) {
+        lowest = _mm_min_ps(lowest, _mm_loadu_ps(&columns.low[axis][j]));
+        highest = _mm_max_ps(highest, _mm_loadu_ps(&columns.high[axis][j]));
+      }
+      float lanes[8];
+      _mm_storeu_ps(lanes, lowest);
+      _mm_storeu_ps(lanes + 4, highest);
+      extent[axis] = 0;
+      for (const float lane : lanes) extent[axis] = std::max(extent[axis], double(std::abs(lane)));
+    }
+    const double spread =
+        std::abs(nx) * extent[0] + std::abs(ny) * extent[1] + std::abs(nz) * extent[2];
+    const double far = std::abs(nx * columns.origin.x()) + std::abs(ny * columns.origin.y()) +
+                       std::abs(nz * columns.origin.z()) + std::abs(distance) + spread;
+    const double error =
+        8 * unit * (spread + std::abs(offset)) + std::ldexp(far, -46) + 4 * unit * tolerance;
+    // Bands around the thresholds, widened for their own rounding to float.
+    const double widened = error * (1 + 8 * unit) + 1e-30;
+    const auto bandLow = [&](double threshold) {
+      return _mm_set1_ps(static_cast<float>(threshold - widened - 4 * unit * std::abs(threshold)));
+    };
+    const auto bandHigh = [&](double threshold) {
+      return _mm_set1_ps(static_cast<float>(threshold + widened + 4 * unit * std::abs(threshold)));
+    };
+    const __m128 aboveLow = bandLow(tolerance), aboveHigh = bandHigh(tolerance);
+    const __m128 belowLow = bandLow(-tolerance), belowHigh = bandHigh(-tolerance);
+    const __m128 above = _mm_set1_ps(static_cast<float>(tolerance)),
+                 below = _mm_set1_ps(static_cast<float>(-tolerance));
+    const __m128 facingBand = _mm_set1_ps(1e-5f);
+    const __m128 vx = _mm_set1_ps(split.normal.x()), vy = _mm_set1_ps(split.normal.y()),
+                 vz = _mm_set1_ps(split.normal.z()), vd = _mm_set1_ps(offsetFloat);
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 signBit = _mm_set1_ps(-0.0f);
+    const auto within = [](__m128 value, __m128 lowEdge, __m128 highEdge) {
+      return _mm_and_ps(_mm_cmpge_ps(value, lowEdge), _mm_cmple_ps(value, highEdge));
+    };
+    const std::uint32_t* order = triangles.order.data();
+    for (; i + 4 <= columns.size; i += 4) {
+      __m128 lowest = _mm_set1_ps(std::numeric_limits<float>::infinity());
+      __m128 highest = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+      for (int k = 0; k < 3; ++k) {
+        const __m128 s = _mm_sub_ps(
+            _mm_add_ps(_mm_add_ps(_mm_mul_ps(vx, _mm_loadu_ps(&columns.corner[k][0][i])),
+                                  _mm_mul_ps(vy, _mm_loadu_ps(&columns.corner[k][1][i]))),
+                       _mm_mul_ps(vz, _mm_loadu_ps(&columns.corner[k][2][i]))),
+            vd);
+        lowest = _mm_min_ps(lowest, s);
+        highest = _mm_max_ps(highest, s);
+      }
+      const __m128 facing =
+          _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(&columns.normal[0][i]), vx),
+                                _mm_mul_ps(_mm_loadu_ps(&columns.normal[1][i]), vy)),
+                     _mm_mul_ps(_mm_loadu_ps(&columns.normal[2][i]), vz));
+      const __m128 inPlane = _mm_and_ps(_mm_cmple_ps(highest, above), _mm_cmpge_ps(lowest, below));
+      const __m128 unsure = _mm_or_ps(
+          _mm_or_ps(
+              _mm_or_ps(within(lowest, aboveLow, aboveHigh), within(lowest, belowLow, belowHigh)),
+              _mm_or_ps(within(highest, aboveLow, aboveHigh),
+                        within(highest, belowLow, belowHigh))),
+          _mm_and_ps(inPlane, _mm_cmple_ps(_mm_andnot_ps(signBit, facing), facingBand)));
+      const __m128 facesFront = _mm_cmpge_ps(facing, zero);
+      const __m128 reachesFront = _mm_or_ps(_mm_and_ps(inPlane, facesFront),
+                                            _mm_andnot_ps(inPlane, _mm_cmpgt_ps(highest, below)));
+      const __m128 reachesBack = _mm_or_ps(_mm_andnot_ps(facesFront, inPlane),
+                                           _mm_andnot_ps(inPlane, _mm_cmplt_ps(lowest, above)));
+      const int frontBits = _mm_movemask_ps(reachesFront), backBits = _mm_movemask_ps(reachesBack),
+                unsureBits = _mm_movemask_ps(unsure);
+      for (int lane = 0; lane < 4; ++lane) {
+        const std::uint32_t t = order[i + std::size_t(lane)];
+        const std::uint8_t sides = (unsureBits >> lane) & 1
+                                       ? classifyInDouble(t)
+                                       : std::uint8_t(((frontBits >> lane) & 1) * kFront |
+                                                      ((backBits >> lane) & 1) * kBack);
+        side[t] = sides;
+        toFront += sides & kFront;
+        toBack += sides >> 1;
+      }
+    }
+#endif
+    for (; i < triangles.size(); ++i) {
+      const std::uint32_t t = triangles.order[i];
+      const std::uint8_t sides = classifyInDouble(t);
+      side[t] = sides;
+      toFront += sides & kFront;
+      toBack += sides >> 1;
     }
     if (toFront == triangles.size() || toBack == triangles.size()) return false;
     const auto share = [&](std::vector<std::uint32_t>& from,
@@ -615,7 +754,8 @@ class TreeBuilder {
   // threads, each block's counts kept apart and summed in order.
   static void countAll(const std::vector<Candidate>& candidates, const Columns& columns,
                        Scratch& scratch, bspf::ThreadPool* pool, std::vector<Counts>& out) {
-    const std::size_t n = columns.size, m = candidates.size();
+    // The padded size: a block's end is a multiple of four.
+    const std::size_t n = columns.padded, m = candidates.size();
     const std::size_t blocks = (n + kBlock - 1) / kBlock;
     scratch.blockCounts.resize(blocks * m);
     runParallel(pool, blocks, 1, [&](int, std::size_t first, std::size_t last) {
@@ -719,7 +859,7 @@ class TreeBuilder {
       const double whole = cell.reachVolume(reach);
       for (const auto& [score, i] : scratch.ranked) {
         auto& c = scratch.counted[i];
-        if (!c.cells) c.cells = {cell.clipped(c.split, true), cell.clipped(c.split, false)};
+        if (!c.cells) c.cells = cell.clippedBoth(c.split);
         const double cost = 1.0 + (c.cells->first.reachVolume(reach) * c.frontTotal +
                                    c.cells->second.reachVolume(reach) * c.backTotal) /
                                       whole;
@@ -765,7 +905,7 @@ class TreeBuilder {
       return makeLeaf(triangles, depth, share, tree);
     const std::optional<Split> split = chooseSplit(triangles, cell, scratch, nullptr);
     Lists front, back;
-    if (!split || !partition(triangles, *split, front, back, scratch.side))
+    if (!split || !partition(triangles, *split, scratch.columns, front, back, scratch.side))
       return makeLeaf(triangles, depth, share, tree);
     const double whole = double(front.size() + back.size());
     const double frontShare = share * double(front.size()) / whole;
@@ -773,10 +913,10 @@ class TreeBuilder {
 
     const auto index = static_cast<std::int32_t>(tree.nodes.size());
     tree.nodes.emplace_back();
+    const auto [frontCell, backCell] = cell.clippedBoth(*split);
     const std::int32_t frontChild =
-        buildNode(front, cell.clipped(*split, true), depth + 1, frontShare, tree, scratch);
-    const std::int32_t backChild =
-        buildNode(back, cell.clipped(*split, false), depth + 1, backShare, tree, scratch);
+        buildNode(front, frontCell, depth + 1, frontShare, tree, scratch);
+    const std::int32_t backChild = buildNode(back, backCell, depth + 1, backShare, tree, scratch);
     tree.nodes[std::size_t(index)] = bspf::schema::Node(toPlane(*split), frontChild, backChild);
     return index;
   }
