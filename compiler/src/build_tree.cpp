@@ -7,12 +7,15 @@
 #include <cstring>
 #include <exception>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <optional>
 #ifdef __SSE2__
 #include <emmintrin.h>
 #endif
 #include <string>
+#include <type_traits>
+#include <utility>
 
 namespace bspc {
 
@@ -104,13 +107,37 @@ enum Side : std::uint8_t { kFront = 1, kBack = 2, kBoth = kFront | kBack };
 // Grows with the plane's offset, as float rounding of the plane does.
 double onPlaneTolerance(const Split& split) { return 1e-5 + 2e-7 * std::abs(split.distance); }
 
+// Leaves its elements uninitialized on resize: partition sizes its lists
+// and then writes every entry, so zeroing them first was wasted work.
+template <class T>
+struct UninitializedAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = UninitializedAllocator<U>;
+  };
+  UninitializedAllocator() = default;
+  template <class U>
+  UninitializedAllocator(const UninitializedAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* at) noexcept(std::is_nothrow_default_constructible_v<U>) {
+    ::new (static_cast<void*>(at)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* at, Args&&... args) {
+    ::new (static_cast<void*>(at)) U(std::forward<Args>(args)...);
+  }
+};
+
+// Triangle indices.
+using IndexList = std::vector<std::uint32_t, UninitializedAllocator<std::uint32_t>>;
+
 // A node's triangles: in the order the node was given them, and, when axis
 // candidates are wanted, sorted by centroid along each axis (sorted once, at
 // the root; a child's lists are its parent's filtered, which keeps them
 // sorted), so a quantile is a look-up.
 struct Lists {
-  std::vector<std::uint32_t> order;
-  std::vector<std::uint32_t> byAxis[3];
+  IndexList order;
+  IndexList byAxis[3];
   std::size_t size() const { return order.size(); }
 };
 
@@ -136,7 +163,7 @@ struct Columns {
   // no side and four at a time needs no one-by-one tail.
   std::size_t padded = 0;
 
-  void gather(const std::vector<std::uint32_t>& triangles, const Mesh& mesh,
+  void gather(const IndexList& triangles, const Mesh& mesh,
               const std::vector<Eigen::Vector3d>& faceNormals, const Eigen::Vector3d& near) {
     size = triangles.size();
     padded = (size + 3) & ~std::size_t(3);
@@ -160,7 +187,52 @@ struct Columns {
       highOut[axis] = high[axis].data();
     }
     const double originAt[3] = {origin.x(), origin.y(), origin.z()};
-    for (std::size_t i = 0; i < size; ++i) {
+    std::size_t i = 0;
+#ifdef __SSE2__
+    // Four triangles at a time: each point (x, y, z) converted as one
+    // vector, four of them turned into columns by a transpose. The same
+    // floats: the same double subtraction and rounding, and
+    // _mm_min_ps(b, a) is std::min(a, b) to the bit (so is max).
+    const __m128d originXy = _mm_loadu_pd(originAt), originZ = _mm_load_sd(originAt + 2);
+    const auto point = [](const double* at, __m128d shiftXy, __m128d shiftZ) {
+      return _mm_movelh_ps(_mm_cvtpd_ps(_mm_sub_pd(_mm_loadu_pd(at), shiftXy)),
+                           _mm_cvtpd_ps(_mm_sub_sd(_mm_load_sd(at + 2), shiftZ)));
+    };
+    const __m128d noShift = _mm_setzero_pd();
+    // One column each of x, y and z for four points (x, y, z) of four
+    // triangles; ((x, y, z, 0) rows turned into columns, the fourth dropped).
+    const auto columnsOf = [&](const double* p0, const double* p1, const double* p2,
+                               const double* p3, __m128d shiftXy, __m128d shiftZ, __m128 out[3]) {
+      __m128 r0 = point(p0, shiftXy, shiftZ), r1 = point(p1, shiftXy, shiftZ),
+             r2 = point(p2, shiftXy, shiftZ), r3 = point(p3, shiftXy, shiftZ);
+      _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+      out[0] = r0;
+      out[1] = r1;
+      out[2] = r2;
+    };
+    for (; i + 4 <= size; i += 4) {
+      const std::uint32_t t0 = triangles[i], t1 = triangles[i + 1], t2 = triangles[i + 2],
+                          t3 = triangles[i + 3];
+      const std::array<std::uint32_t, 3>&c0 = mesh.triangles[t0], &c1 = mesh.triangles[t1],
+                                      &c2 = mesh.triangles[t2], &c3 = mesh.triangles[t3];
+      __m128 a[3], b[3], c[3], facing[3];
+      const auto vertex = [&](std::uint32_t v) { return mesh.vertices[v].data(); };
+      columnsOf(vertex(c0[0]), vertex(c1[0]), vertex(c2[0]), vertex(c3[0]), originXy, originZ, a);
+      columnsOf(vertex(c0[1]), vertex(c1[1]), vertex(c2[1]), vertex(c3[1]), originXy, originZ, b);
+      columnsOf(vertex(c0[2]), vertex(c1[2]), vertex(c2[2]), vertex(c3[2]), originXy, originZ, c);
+      columnsOf(faceNormals[t0].data(), faceNormals[t1].data(), faceNormals[t2].data(),
+                faceNormals[t3].data(), noShift, noShift, facing);
+      for (int axis = 0; axis < 3; ++axis) {
+        _mm_storeu_ps(cornerOut[0][axis] + i, a[axis]);
+        _mm_storeu_ps(cornerOut[1][axis] + i, b[axis]);
+        _mm_storeu_ps(cornerOut[2][axis] + i, c[axis]);
+        _mm_storeu_ps(normalOut[axis] + i, facing[axis]);
+        _mm_storeu_ps(lowOut[axis] + i, _mm_min_ps(c[axis], _mm_min_ps(b[axis], a[axis])));
+        _mm_storeu_ps(highOut[axis] + i, _mm_max_ps(c[axis], _mm_max_ps(b[axis], a[axis])));
+      }
+    }
+#endif
+    for (; i < size; ++i) {
       const std::uint32_t t = triangles[i];
       const std::array<std::uint32_t, 3>& corners = mesh.triangles[t];
       const double* at[3] = {mesh.vertices[corners[0]].data(), mesh.vertices[corners[1]].data(),
@@ -260,12 +332,19 @@ Counts countAxisSplit(const Columns& c, std::size_t begin, std::size_t end, int 
 #ifdef __SSE2__
   TallySse2 lanes(tolerance);
   const __m128 vd = _mm_set1_ps(distance);
-  // Negation flips the sign bit, exactly.
-  const __m128 flip = _mm_set1_ps(flipped ? -0.0f : 0.0f);
-  for (; i + 4 <= end; i += 4)
-    lanes.add(_mm_sub_ps(_mm_xor_ps(_mm_loadu_ps(low + i), flip), vd),
-              _mm_sub_ps(_mm_xor_ps(_mm_loadu_ps(high + i), flip), vd),
-              _mm_xor_ps(_mm_loadu_ps(normal + i), flip));
+  if (flipped) {
+    // Negation flips the sign bit, exactly.
+    const __m128 flip = _mm_set1_ps(-0.0f);
+    for (; i + 4 <= end; i += 4)
+      lanes.add(_mm_sub_ps(_mm_xor_ps(_mm_loadu_ps(low + i), flip), vd),
+                _mm_sub_ps(_mm_xor_ps(_mm_loadu_ps(high + i), flip), vd),
+                _mm_xor_ps(_mm_loadu_ps(normal + i), flip));
+  } else {
+    // The axis quantiles: most of the axis candidates.
+    for (; i + 4 <= end; i += 4)
+      lanes.add(_mm_sub_ps(_mm_loadu_ps(low + i), vd), _mm_sub_ps(_mm_loadu_ps(high + i), vd),
+                _mm_loadu_ps(normal + i));
+  }
   counts = lanes.counts();
 #endif
   Tally tally;
@@ -395,11 +474,7 @@ class TreeBuilder {
     if (settings_.candidates != SplitCandidates::Triangle)
       runParallel(pool_, 3, 1, [&](int, std::size_t first, std::size_t last) {
         for (std::size_t axis = first; axis < last; ++axis) {
-          std::vector<std::pair<double, std::uint32_t>> keyed(all.size());
-          for (std::uint32_t i = 0; i < all.size(); ++i) keyed[i] = {centroids_[i][axis], i};
-          std::sort(keyed.begin(), keyed.end());
-          all.byAxis[axis].resize(all.size());
-          for (std::uint32_t i = 0; i < all.size(); ++i) all.byAxis[axis][i] = keyed[i].second;
+          sortByCoordinate(int(axis), all.byAxis[axis]);
         }
       });
     Box bounds{mesh_.vertices.front(), mesh_.vertices.front()};
@@ -431,6 +506,44 @@ class TreeBuilder {
   }
 
  private:
+  // The mesh's triangles in order of their centroids' coordinate on `axis`,
+  // ties in order of index: the order of sorted (coordinate, index) pairs,
+  // by a stable radix sort of the coordinates' bits made to order as the
+  // numbers do (sign bit set on the positive, all bits flipped on the
+  // negative; -0 first made +0, which it equals). Six passes of 11 bits
+  // (few buckets to clear for a small mesh), a pass skipped where every
+  // key has the same digit.
+  void sortByCoordinate(int axis, IndexList& out) const {
+    const std::size_t n = centroids_.size();
+    std::vector<std::uint64_t> keys(n), keysTo(n);
+    IndexList order(n), orderTo(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double value = centroids_[i][axis] + 0.0;
+      std::uint64_t bits;
+      std::memcpy(&bits, &value, sizeof bits);
+      keys[i] = bits >> 63 ? ~bits : bits | (std::uint64_t(1) << 63);
+      order[i] = static_cast<std::uint32_t>(i);
+    }
+    constexpr int kDigitBits = 11;
+    constexpr std::uint64_t kDigit = (std::uint64_t(1) << kDigitBits) - 1;
+    std::vector<std::size_t> start(std::size_t(1) << kDigitBits);
+    for (int shift = 0; shift < 64; shift += kDigitBits) {
+      std::fill(start.begin(), start.end(), 0);
+      for (const std::uint64_t key : keys) ++start[(key >> shift) & kDigit];
+      if (n && start[(keys[0] >> shift) & kDigit] == n) continue;
+      std::size_t sum = 0;
+      for (std::size_t& s : start) sum += std::exchange(s, sum);
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t to = start[(keys[i] >> shift) & kDigit]++;
+        keysTo[to] = keys[i];
+        orderTo[to] = order[i];
+      }
+      keys.swap(keysTo);
+      order.swap(orderTo);
+    }
+    out = std::move(order);
+  }
+
   // A part of the tree built on one thread, into its own arrays.
   struct Subtree {
     Lists lists;
@@ -630,9 +743,7 @@ class TreeBuilder {
       toBack += sides >> 1;
     }
     if (toFront == triangles.size() || toBack == triangles.size()) return false;
-    const auto share = [&](std::vector<std::uint32_t>& from,
-                           std::vector<std::uint32_t>& toFrontList,
-                           std::vector<std::uint32_t>& toBackList) {
+    const auto share = [&](IndexList& from, IndexList& toFrontList, IndexList& toBackList) {
       if (from.empty()) return;
       // One spare slot each: the write past a side's last kept entry.
       toFrontList.resize(toFront + 1);
@@ -700,7 +811,7 @@ class TreeBuilder {
       }
     };
     const auto n = lists.size();
-    const std::vector<std::uint32_t>& triangles = lists.order;
+    const IndexList& triangles = lists.order;
     if (settings_.candidates != SplitCandidates::Triangle) {
       const std::uint32_t quantiles = settings_.axisCandidatesPerAxis;
       for (int axis = 0; axis < 3; ++axis) {
@@ -734,7 +845,7 @@ class TreeBuilder {
   // Per-thread working memory of the split search.
   struct Scratch {
     Columns columns, sampleColumns;
-    std::vector<std::uint32_t> sample;
+    IndexList sample;
     std::vector<std::uint8_t> side;
     std::vector<std::int32_t> slots;
     std::vector<Candidate> candidates, shortlist;
@@ -874,7 +985,7 @@ class TreeBuilder {
   }
 
   std::int32_t makeLeaf(Lists& lists, std::uint32_t depth, double share, BspTree& tree) {
-    std::vector<std::uint32_t>& triangles = lists.order;
+    IndexList& triangles = lists.order;
     std::sort(triangles.begin(), triangles.end());
     const auto first = static_cast<std::uint32_t>(tree.leafTriangles.size());
     tree.leafTriangles.insert(tree.leafTriangles.end(), triangles.begin(), triangles.end());
