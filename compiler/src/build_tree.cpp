@@ -290,13 +290,21 @@ struct TallySse2 {
   __m128i front = _mm_setzero_si128(), back = _mm_setzero_si128(), both = _mm_setzero_si128();
   explicit TallySse2(float tolerance)
       : above(_mm_set1_ps(tolerance)), below(_mm_set1_ps(-tolerance)) {}
-  void add(__m128 lowest, __m128 highest, __m128 facing) {
+  // `facing()` gives the lanes' facings; it is called only when a lane
+  // lies in the plane, which few do (for most four, the side follows from
+  // the distances alone).
+  template <class Facing>
+  void add(__m128 lowest, __m128 highest, const Facing& facing) {
     const __m128 inPlane = _mm_and_ps(_mm_cmple_ps(highest, above), _mm_cmpge_ps(lowest, below));
-    const __m128 facesFront = _mm_cmpge_ps(facing, zero);
-    const __m128 reachesFront = _mm_or_ps(_mm_and_ps(inPlane, facesFront),
-                                          _mm_andnot_ps(inPlane, _mm_cmpgt_ps(highest, below)));
-    const __m128 reachesBack = _mm_or_ps(_mm_andnot_ps(facesFront, inPlane),
-                                         _mm_andnot_ps(inPlane, _mm_cmplt_ps(lowest, above)));
+    __m128 reachesFront = _mm_cmpgt_ps(highest, below);
+    __m128 reachesBack = _mm_cmplt_ps(lowest, above);
+    if (_mm_movemask_ps(inPlane)) {
+      const __m128 facesFront = _mm_cmpge_ps(facing(), zero);
+      reachesFront =
+          _mm_or_ps(_mm_and_ps(inPlane, facesFront), _mm_andnot_ps(inPlane, reachesFront));
+      reachesBack =
+          _mm_or_ps(_mm_andnot_ps(facesFront, inPlane), _mm_andnot_ps(inPlane, reachesBack));
+    }
     // A mask lane is all ones, -1 as an integer: subtracting counts it.
     // `front` and `back` count all that reach the side; counts() takes
     // those reaching both out.
@@ -338,12 +346,12 @@ Counts countAxisSplit(const Columns& c, std::size_t begin, std::size_t end, int 
     for (; i + 4 <= end; i += 4)
       lanes.add(_mm_sub_ps(_mm_xor_ps(_mm_loadu_ps(low + i), flip), vd),
                 _mm_sub_ps(_mm_xor_ps(_mm_loadu_ps(high + i), flip), vd),
-                _mm_xor_ps(_mm_loadu_ps(normal + i), flip));
+                [&] { return _mm_xor_ps(_mm_loadu_ps(normal + i), flip); });
   } else {
     // The axis quantiles: most of the axis candidates.
     for (; i + 4 <= end; i += 4)
       lanes.add(_mm_sub_ps(_mm_loadu_ps(low + i), vd), _mm_sub_ps(_mm_loadu_ps(high + i), vd),
-                _mm_loadu_ps(normal + i));
+                [&] { return _mm_loadu_ps(normal + i); });
   }
   counts = lanes.counts();
 #endif
@@ -379,10 +387,11 @@ Counts countSplit(const Columns& c, std::size_t begin, std::size_t end, const Ei
     }
     lowest = _mm_sub_ps(lowest, vd);
     highest = _mm_sub_ps(highest, vd);
-    const __m128 facing = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(&c.normal[0][i]), vx),
-                                                _mm_mul_ps(_mm_loadu_ps(&c.normal[1][i]), vy)),
-                                     _mm_mul_ps(_mm_loadu_ps(&c.normal[2][i]), vz));
-    lanes.add(lowest, highest, facing);
+    lanes.add(lowest, highest, [&] {
+      return _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(&c.normal[0][i]), vx),
+                                   _mm_mul_ps(_mm_loadu_ps(&c.normal[1][i]), vy)),
+                        _mm_mul_ps(_mm_loadu_ps(&c.normal[2][i]), vz));
+    });
   }
   counts = lanes.counts();
 #endif
@@ -566,7 +575,7 @@ class TreeBuilder {
         depth < settings_.maxDepth)
       split = chooseSplit(triangles, cell, scratch_.front(), pool_);
     Lists front, back;
-    if (!split || !partition(triangles, *split, scratch_.front().columns, front, back,
+    if (!split || !partition(triangles, *split, scratch_.front().columns, depth + 1, front, back,
                              scratch_.front().side)) {
       subtrees_.push_back({std::move(triangles), cell, depth, share, {}, -1});
       return -static_cast<std::int32_t>(subtrees_.size());
@@ -615,9 +624,11 @@ class TreeBuilder {
   // counts. False, with `triangles` left as they were, when every triangle
   // would reach one side: the split makes no progress (the float counts
   // said it did, which only a triangle at the tolerance's edge can make
-  // them say).
-  bool partition(Lists& triangles, const Split& split, const Columns& columns, Lists& front,
-                 Lists& back, std::vector<std::uint8_t>& side) const {
+  // them say). `childDepth`: the children's depth, which with their sizes
+  // tells whether they will be split (and need their axis orders).
+  bool partition(Lists& triangles, const Split& split, const Columns& columns,
+                 std::uint32_t childDepth, Lists& front, Lists& back,
+                 std::vector<std::uint8_t>& side) const {
     side.resize(mesh_.triangles.size());
     const double nx = split.normal.x(), ny = split.normal.y(), nz = split.normal.z();
     const double distance = split.distance, tolerance = onPlaneTolerance(split);
@@ -743,27 +754,45 @@ class TreeBuilder {
       toBack += sides >> 1;
     }
     if (toFront == triangles.size() || toBack == triangles.size()) return false;
-    const auto share = [&](IndexList& from, IndexList& toFrontList, IndexList& toBackList) {
+    // A side's list is written when wanted: a child that will be a leaf
+    // (few triangles, or at the depth limit) never reads its axis orders.
+    const auto share = [&](IndexList& from, IndexList& toFrontList, IndexList& toBackList,
+                           bool wantFront, bool wantBack) {
       if (from.empty()) return;
       // One spare slot each: the write past a side's last kept entry.
-      toFrontList.resize(toFront + 1);
-      toBackList.resize(toBack + 1);
+      if (wantFront) toFrontList.resize(toFront + 1);
+      if (wantBack) toBackList.resize(toBack + 1);
       std::uint32_t *frontOut = toFrontList.data(), *backOut = toBackList.data();
       // Written unconditionally, kept by the side's bit: no branch to mispredict.
-      for (const std::uint32_t t : from) {
-        *frontOut = t;
-        *backOut = t;
-        frontOut += side[t] & kFront;
-        backOut += (side[t] & kBack) >> 1;
-      }
-      toFrontList.pop_back();
-      toBackList.pop_back();
+      if (wantFront && wantBack)
+        for (const std::uint32_t t : from) {
+          *frontOut = t;
+          *backOut = t;
+          frontOut += side[t] & kFront;
+          backOut += (side[t] & kBack) >> 1;
+        }
+      else if (wantFront)
+        for (const std::uint32_t t : from) {
+          *frontOut = t;
+          frontOut += side[t] & kFront;
+        }
+      else if (wantBack)
+        for (const std::uint32_t t : from) {
+          *backOut = t;
+          backOut += (side[t] & kBack) >> 1;
+        }
+      if (wantFront) toFrontList.pop_back();
+      if (wantBack) toBackList.pop_back();
       from.clear();
       from.shrink_to_fit();
     };
-    share(triangles.order, front.order, back.order);
+    share(triangles.order, front.order, back.order, true, true);
+    const auto splitFurther = [&](std::size_t count) {
+      return count > settings_.maxLeafTriangles && childDepth < settings_.maxDepth;
+    };
     for (int axis = 0; axis < 3; ++axis)
-      share(triangles.byAxis[axis], front.byAxis[axis], back.byAxis[axis]);
+      share(triangles.byAxis[axis], front.byAxis[axis], back.byAxis[axis], splitFurther(toFront),
+            splitFurther(toBack));
     return true;
   }
 
@@ -1016,7 +1045,8 @@ class TreeBuilder {
       return makeLeaf(triangles, depth, share, tree);
     const std::optional<Split> split = chooseSplit(triangles, cell, scratch, nullptr);
     Lists front, back;
-    if (!split || !partition(triangles, *split, scratch.columns, front, back, scratch.side))
+    if (!split ||
+        !partition(triangles, *split, scratch.columns, depth + 1, front, back, scratch.side))
       return makeLeaf(triangles, depth, share, tree);
     const double whole = double(front.size() + back.size());
     const double frontShare = share * double(front.size()) / whole;
