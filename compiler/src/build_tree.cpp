@@ -287,7 +287,7 @@ struct Tally {
 // Tally on four triangles at once: the same decisions, lane by lane.
 struct TallySse2 {
   __m128 above, below, zero = _mm_setzero_ps();
-  __m128i front = _mm_setzero_si128(), back = _mm_setzero_si128(), both = _mm_setzero_si128();
+  __m128i front = _mm_setzero_si128(), back = _mm_setzero_si128();
   explicit TallySse2(float tolerance)
       : above(_mm_set1_ps(tolerance)), below(_mm_set1_ps(-tolerance)) {}
   // `facing()` gives the lanes' facings; it is called only when a lane
@@ -306,20 +306,27 @@ struct TallySse2 {
           _mm_or_ps(_mm_andnot_ps(facesFront, inPlane), _mm_andnot_ps(inPlane, reachesBack));
     }
     // A mask lane is all ones, -1 as an integer: subtracting counts it.
-    // `front` and `back` count all that reach the side; counts() takes
-    // those reaching both out.
+    // `front` and `back` count all that reach the side; counts() finds
+    // those reaching both from them.
     front = _mm_sub_epi32(front, _mm_castps_si128(reachesFront));
     back = _mm_sub_epi32(back, _mm_castps_si128(reachesBack));
-    both = _mm_sub_epi32(both, _mm_castps_si128(_mm_and_ps(reachesFront, reachesBack)));
   }
   static std::size_t sum(__m128i v) {
     std::uint32_t lanes[4];
     _mm_storeu_si128(reinterpret_cast<__m128i*>(lanes), v);
     return std::size_t(lanes[0]) + lanes[1] + lanes[2] + lanes[3];
   }
-  Counts counts() const {
-    const std::size_t inBoth = sum(both);
-    return {sum(front) - inBoth, sum(back) - inBoth, inBoth};
+  // `triangles`: the lanes added that hold a triangle (not padding). Each
+  // reaches a side: out of the plane its highest distance is above the
+  // tolerance (so above minus it) or its lowest below minus the tolerance,
+  // and in it its facing, a finite number, is >= 0 or not. (A NaN
+  // coordinate would break this and skew the counts, which only guide the
+  // choice: partition decides the lists.) So the triangles reaching both
+  // sides are those counted twice.
+  Counts counts(std::size_t triangles) const {
+    const std::size_t reachFront = sum(front), reachBack = sum(back);
+    const std::size_t inBoth = reachFront + reachBack - triangles;
+    return {reachFront - inBoth, reachBack - inBoth, inBoth};
   }
 };
 #endif
@@ -353,7 +360,7 @@ Counts countAxisSplit(const Columns& c, std::size_t begin, std::size_t end, int 
       lanes.add(_mm_sub_ps(_mm_loadu_ps(low + i), vd), _mm_sub_ps(_mm_loadu_ps(high + i), vd),
                 [&] { return _mm_loadu_ps(normal + i); });
   }
-  counts = lanes.counts();
+  counts = lanes.counts(std::min(i, c.size) - std::min(begin, c.size));
 #endif
   Tally tally;
   for (; i < end; ++i)
@@ -393,7 +400,7 @@ Counts countSplit(const Columns& c, std::size_t begin, std::size_t end, const Ei
                         _mm_mul_ps(_mm_loadu_ps(&c.normal[2][i]), vz));
     });
   }
-  counts = lanes.counts();
+  counts = lanes.counts(std::min(i, c.size) - std::min(begin, c.size));
 #endif
   Tally tally;
   for (; i < end; ++i) {
