@@ -41,36 +41,52 @@ struct Box {
       if (std::abs(n[axis]) == 1.0 && n[(axis + 1) % 3] == 0.0 && n[(axis + 2) % 3] == 0.0)
         return {clippedOnAxis(axis, n[axis], split.distance, 1.0),
                 clippedOnAxis(axis, n[axis], split.distance, -1.0)};
-    Eigen::Vector3d corners[8];
+    double corners[8][3];
     double along[8];
     for (int i = 0; i < 8; ++i) {
-      corners[i] = Eigen::Vector3d(i & 1 ? high.x() : low.x(), i & 2 ? high.y() : low.y(),
+      const Eigen::Vector3d corner(i & 1 ? high.x() : low.x(), i & 2 ? high.y() : low.y(),
                                    i & 4 ? high.z() : low.z());
-      along[i] = n.dot(corners[i]) - split.distance;
+      along[i] = n.dot(corner) - split.distance;
+      for (int axis = 0; axis < 3; ++axis) corners[i][axis] = corner[axis];
     }
+    // The twelve edges: corner i, corner j = i with the axis's bit set.
+    static constexpr int kEdges[12][3] = {{0, 1, 0}, {2, 3, 0}, {4, 5, 0}, {6, 7, 0},
+                                          {0, 2, 1}, {1, 3, 1}, {4, 6, 1}, {5, 7, 1},
+                                          {0, 4, 2}, {1, 5, 2}, {2, 6, 2}, {3, 7, 2}};
     Box boxes[2];
     for (int keep = 0; keep < 2; ++keep) {
       const double sign = keep == 0 ? 1.0 : -1.0;
-      Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-      Eigen::Vector3d hi = -lo;
-      auto add = [&](const Eigen::Vector3d& p) {
-        lo = lo.cwiseMin(p);
-        hi = hi.cwiseMax(p);
+      double lo[3], hi[3];
+      for (int axis = 0; axis < 3; ++axis) {
+        lo[axis] = std::numeric_limits<double>::infinity();
+        hi[axis] = -std::numeric_limits<double>::infinity();
+      }
+      const auto add = [&](double x, double y, double z) {
+        lo[0] = std::min(lo[0], x);
+        lo[1] = std::min(lo[1], y);
+        lo[2] = std::min(lo[2], z);
+        hi[0] = std::max(hi[0], x);
+        hi[1] = std::max(hi[1], y);
+        hi[2] = std::max(hi[2], z);
       };
       double side[8];
       for (int i = 0; i < 8; ++i) {
         side[i] = sign * along[i];
-        if (side[i] >= 0) add(corners[i]);
+        if (side[i] >= 0) add(corners[i][0], corners[i][1], corners[i][2]);
       }
-      for (int i = 0; i < 8; ++i)
-        for (int axis = 0; axis < 3; ++axis) {
-          const int j = i | (1 << axis);
-          if (j == i || (side[i] >= 0) == (side[j] >= 0)) continue;
-          const double t = side[i] / (side[i] - side[j]);
-          add(corners[i] + t * (corners[j] - corners[i]));
-        }
-      // Empty: nothing on that side.
-      boxes[keep] = (lo.array() <= hi.array()).all() ? Box{lo, hi} : Box{low, low};
+      // A crossing moves only along its edge's axis: its other coordinates
+      // are the corner's (the interpolation adds t * 0 to them).
+      for (const auto& [i, j, axis] : kEdges) {
+        if ((side[i] >= 0) == (side[j] >= 0)) continue;
+        const double t = side[i] / (side[i] - side[j]);
+        double at[3] = {corners[i][0], corners[i][1], corners[i][2]};
+        at[axis] = corners[i][axis] + t * (corners[j][axis] - corners[i][axis]);
+        add(at[0], at[1], at[2]);
+      }
+      if (lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2])
+        boxes[keep] = {Eigen::Vector3d(lo[0], lo[1], lo[2]), Eigen::Vector3d(hi[0], hi[1], hi[2])};
+      else
+        boxes[keep] = {low, low};  // nothing on that side
     }
     return {boxes[0], boxes[1]};
   }
