@@ -847,10 +847,12 @@ class TreeBuilder {
       // + 0.0f: -0 and +0, equal to ==, hash alike.
       const float key[4] = {split.normal.x() + 0.0f, split.normal.y() + 0.0f,
                             split.normal.z() + 0.0f, split.distance + 0.0f};
-      std::uint32_t bits[4];
-      std::memcpy(bits, key, sizeof bits);
-      std::uint64_t hash = 0;
-      for (const std::uint32_t b : bits) hash = (hash ^ b) * 0x9E3779B97F4A7C15ull;
+      // Two words, two multiplications: the hash only picks the first slot
+      // tried, never which candidates are kept or their order.
+      std::uint64_t words[2];
+      std::memcpy(words, key, sizeof words);
+      const std::uint64_t hash =
+          ((words[0] * 0x9E3779B97F4A7C15ull) ^ words[1]) * 0xC2B2AE3D27D4EB4Full;
       for (std::size_t slot = std::size_t(hash >> 40) & (tableSize - 1);;
            slot = (slot + 1) & (tableSize - 1)) {
         if (slots[slot] < 0) {
