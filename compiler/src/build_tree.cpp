@@ -397,19 +397,16 @@ Counts countSplit(const Columns& c, std::size_t begin, std::size_t end, const Ei
                vd = _mm_set1_ps(distance);
   TallySse2 lanes(tolerance);
   for (; i + 4 <= end; i += 4) {
-    __m128 lowest = _mm_set1_ps(std::numeric_limits<float>::infinity());
-    __m128 highest = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+    const auto along = [&](int k) {
+      return _mm_add_ps(_mm_add_ps(_mm_mul_ps(vx, _mm_loadu_ps(&c.corner[k][0][i])),
+                                   _mm_mul_ps(vy, _mm_loadu_ps(&c.corner[k][1][i]))),
+                        _mm_mul_ps(vz, _mm_loadu_ps(&c.corner[k][2][i])));
+    };
+    const __m128 s0 = along(0), s1 = along(1), s2 = along(2);
     // The offset subtracted after the lowest and highest are found: float
     // subtraction is monotonic, so they are those of the differences.
-    for (int k = 0; k < 3; ++k) {
-      const __m128 s = _mm_add_ps(_mm_add_ps(_mm_mul_ps(vx, _mm_loadu_ps(&c.corner[k][0][i])),
-                                             _mm_mul_ps(vy, _mm_loadu_ps(&c.corner[k][1][i]))),
-                                  _mm_mul_ps(vz, _mm_loadu_ps(&c.corner[k][2][i])));
-      lowest = _mm_min_ps(lowest, s);
-      highest = _mm_max_ps(highest, s);
-    }
-    lowest = _mm_sub_ps(lowest, vd);
-    highest = _mm_sub_ps(highest, vd);
+    const __m128 lowest = _mm_sub_ps(_mm_min_ps(_mm_min_ps(s0, s1), s2), vd);
+    const __m128 highest = _mm_sub_ps(_mm_max_ps(_mm_max_ps(s0, s1), s2), vd);
     lanes.add(lowest, highest, [&] {
       return _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(&c.normal[0][i]), vx),
                                    _mm_mul_ps(_mm_loadu_ps(&c.normal[1][i]), vy)),
@@ -728,17 +725,16 @@ class TreeBuilder {
     };
     const std::uint32_t* order = triangles.order.data();
     for (; i + 4 <= columns.size; i += 4) {
-      __m128 lowest = _mm_set1_ps(std::numeric_limits<float>::infinity());
-      __m128 highest = _mm_set1_ps(-std::numeric_limits<float>::infinity());
-      for (int k = 0; k < 3; ++k) {
-        const __m128 s = _mm_sub_ps(
+      const auto along = [&](int k) {
+        return _mm_sub_ps(
             _mm_add_ps(_mm_add_ps(_mm_mul_ps(vx, _mm_loadu_ps(&columns.corner[k][0][i])),
                                   _mm_mul_ps(vy, _mm_loadu_ps(&columns.corner[k][1][i]))),
                        _mm_mul_ps(vz, _mm_loadu_ps(&columns.corner[k][2][i]))),
             vd);
-        lowest = _mm_min_ps(lowest, s);
-        highest = _mm_max_ps(highest, s);
-      }
+      };
+      const __m128 s0 = along(0), s1 = along(1), s2 = along(2);
+      const __m128 lowest = _mm_min_ps(_mm_min_ps(s0, s1), s2);
+      const __m128 highest = _mm_max_ps(_mm_max_ps(s0, s1), s2);
       const __m128 facing =
           _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(&columns.normal[0][i]), vx),
                                 _mm_mul_ps(_mm_loadu_ps(&columns.normal[1][i]), vy)),
