@@ -327,11 +327,6 @@ struct TallySse2 {
     front = _mm_sub_epi32(front, _mm_castps_si128(reachesFront));
     back = _mm_sub_epi32(back, _mm_castps_si128(reachesBack));
   }
-  static std::size_t sum(__m128i v) {
-    std::uint32_t lanes[4];
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(lanes), v);
-    return std::size_t(lanes[0]) + lanes[1] + lanes[2] + lanes[3];
-  }
   // `triangles`: the lanes added that hold a triangle (not padding). Each
   // reaches a side: out of the plane its highest distance is above the
   // tolerance (so above minus it) or its lowest below minus the tolerance,
@@ -340,7 +335,14 @@ struct TallySse2 {
   // choice: partition decides the lists.) So the triangles reaching both
   // sides are those counted twice.
   Counts counts(std::size_t triangles) const {
-    const std::size_t reachFront = sum(front), reachBack = sum(back);
+    // Both lane sums at once: lanes interleaved, (f0 + f2, b0 + b2, f1 +
+    // f3, b1 + b3), then its halves added.
+    const __m128i pairs =
+        _mm_add_epi32(_mm_unpacklo_epi32(front, back), _mm_unpackhi_epi32(front, back));
+    const __m128i totals = _mm_add_epi32(pairs, _mm_unpackhi_epi64(pairs, pairs));
+    const std::size_t reachFront = static_cast<std::uint32_t>(_mm_cvtsi128_si32(totals));
+    const std::size_t reachBack =
+        static_cast<std::uint32_t>(_mm_cvtsi128_si32(_mm_shuffle_epi32(totals, 1)));
     const std::size_t inBoth = reachFront + reachBack - triangles;
     return {reachFront - inBoth, reachBack - inBoth, inBoth};
   }
