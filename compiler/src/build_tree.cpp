@@ -7,12 +7,15 @@
 #include <cstring>
 #include <exception>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <optional>
 #ifdef __SSE2__
 #include <emmintrin.h>
 #endif
 #include <string>
+#include <type_traits>
+#include <utility>
 
 namespace bspc {
 
@@ -29,42 +32,68 @@ struct Split {
 struct Box {
   Eigen::Vector3d low, high;
 
-  // The box around the part of this box on one side of a plane.
-  Box clipped(const Split& split, bool keepFront) const {
+  // The boxes around the parts of this box in front of and behind a plane,
+  // from one evaluation of the corners' signed distances (a distance from
+  // the back is the front's negated, exactly).
+  std::pair<Box, Box> clippedBoth(const Split& split) const {
     const Eigen::Vector3d n = split.normal.cast<double>();
-    const double sign = keepFront ? 1.0 : -1.0;
     for (int axis = 0; axis < 3; ++axis)
       if (std::abs(n[axis]) == 1.0 && n[(axis + 1) % 3] == 0.0 && n[(axis + 2) % 3] == 0.0)
-        return clippedOnAxis(axis, n[axis], split.distance, sign);
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-    Eigen::Vector3d hi = -lo;
-    auto corner = [&](int i) {
-      return Eigen::Vector3d(i & 1 ? high.x() : low.x(), i & 2 ? high.y() : low.y(),
-                             i & 4 ? high.z() : low.z());
-    };
-    auto add = [&](const Eigen::Vector3d& p) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    };
-    double side[8];
+        return {clippedOnAxis(axis, n[axis], split.distance, 1.0),
+                clippedOnAxis(axis, n[axis], split.distance, -1.0)};
+    double corners[8][3];
+    double along[8];
     for (int i = 0; i < 8; ++i) {
-      side[i] = sign * (n.dot(corner(i)) - split.distance);
-      if (side[i] >= 0) add(corner(i));
+      const Eigen::Vector3d corner(i & 1 ? high.x() : low.x(), i & 2 ? high.y() : low.y(),
+                                   i & 4 ? high.z() : low.z());
+      along[i] = n.dot(corner) - split.distance;
+      for (int axis = 0; axis < 3; ++axis) corners[i][axis] = corner[axis];
     }
-    for (int i = 0; i < 8; ++i)
+    // The twelve edges: corner i, corner j = i with the axis's bit set.
+    static constexpr int kEdges[12][3] = {{0, 1, 0}, {2, 3, 0}, {4, 5, 0}, {6, 7, 0},
+                                          {0, 2, 1}, {1, 3, 1}, {4, 6, 1}, {5, 7, 1},
+                                          {0, 4, 2}, {1, 5, 2}, {2, 6, 2}, {3, 7, 2}};
+    Box boxes[2];
+    for (int keep = 0; keep < 2; ++keep) {
+      const double sign = keep == 0 ? 1.0 : -1.0;
+      double lo[3], hi[3];
       for (int axis = 0; axis < 3; ++axis) {
-        const int j = i | (1 << axis);
-        if (j == i || (side[i] >= 0) == (side[j] >= 0)) continue;
-        const double t = side[i] / (side[i] - side[j]);
-        add(corner(i) + t * (corner(j) - corner(i)));
+        lo[axis] = std::numeric_limits<double>::infinity();
+        hi[axis] = -std::numeric_limits<double>::infinity();
       }
-    if (!(lo.array() <= hi.array()).all()) return {low, low};  // nothing on that side
-    return {lo, hi};
+      const auto add = [&](double x, double y, double z) {
+        lo[0] = std::min(lo[0], x);
+        lo[1] = std::min(lo[1], y);
+        lo[2] = std::min(lo[2], z);
+        hi[0] = std::max(hi[0], x);
+        hi[1] = std::max(hi[1], y);
+        hi[2] = std::max(hi[2], z);
+      };
+      double side[8];
+      for (int i = 0; i < 8; ++i) {
+        side[i] = sign * along[i];
+        if (side[i] >= 0) add(corners[i][0], corners[i][1], corners[i][2]);
+      }
+      // A crossing moves only along its edge's axis: its other coordinates
+      // are the corner's (the interpolation adds t * 0 to them).
+      for (const auto& [i, j, axis] : kEdges) {
+        if ((side[i] >= 0) == (side[j] >= 0)) continue;
+        const double t = side[i] / (side[i] - side[j]);
+        double at[3] = {corners[i][0], corners[i][1], corners[i][2]};
+        at[axis] = corners[i][axis] + t * (corners[j][axis] - corners[i][axis]);
+        add(at[0], at[1], at[2]);
+      }
+      if (lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2])
+        boxes[keep] = {Eigen::Vector3d(lo[0], lo[1], lo[2]), Eigen::Vector3d(hi[0], hi[1], hi[2])};
+      else
+        boxes[keep] = {low, low};  // nothing on that side
+    }
+    return {boxes[0], boxes[1]};
   }
 
-  // clipped for a normal along `axis` (`direction` +1 or -1): the general
-  // case's arithmetic on the one edge direction that can cross the plane,
-  // so the same box to the bit. The corners' other coordinates are exact.
+  // clippedBoth's box on one side (`sign` +1 front, -1 back) for a normal along `axis` (`direction`
+  // +1 or -1): the general case's arithmetic on the one edge direction that can cross the plane, so
+  // the same box to the bit. The corners' other coordinates are exact.
   Box clippedOnAxis(int axis, double direction, double distance, double sign) const {
     const double sideLow = sign * (direction * low[axis] - distance);
     const double sideHigh = sign * (direction * high[axis] - distance);
@@ -94,13 +123,37 @@ enum Side : std::uint8_t { kFront = 1, kBack = 2, kBoth = kFront | kBack };
 // Grows with the plane's offset, as float rounding of the plane does.
 double onPlaneTolerance(const Split& split) { return 1e-5 + 2e-7 * std::abs(split.distance); }
 
+// Leaves its elements uninitialized on resize: partition sizes its lists
+// and then writes every entry, so zeroing them first was wasted work.
+template <class T>
+struct UninitializedAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = UninitializedAllocator<U>;
+  };
+  UninitializedAllocator() = default;
+  template <class U>
+  UninitializedAllocator(const UninitializedAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* at) noexcept(std::is_nothrow_default_constructible_v<U>) {
+    ::new (static_cast<void*>(at)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* at, Args&&... args) {
+    ::new (static_cast<void*>(at)) U(std::forward<Args>(args)...);
+  }
+};
+
+// Triangle indices.
+using IndexList = std::vector<std::uint32_t, UninitializedAllocator<std::uint32_t>>;
+
 // A node's triangles: in the order the node was given them, and, when axis
 // candidates are wanted, sorted by centroid along each axis (sorted once, at
 // the root; a child's lists are its parent's filtered, which keeps them
 // sorted), so a quantile is a look-up.
 struct Lists {
-  std::vector<std::uint32_t> order;
-  std::vector<std::uint32_t> byAxis[3];
+  IndexList order;
+  IndexList byAxis[3];
   std::size_t size() const { return order.size(); }
 };
 
@@ -109,8 +162,10 @@ struct Lists {
 // a small fraction of the on-plane tolerance), the face normal, and each
 // axis's lowest and highest corner. A candidate is then counted in one pass
 // over contiguous memory, four triangles at a time. The counts only guide
-// the choice of a split: partition classifies in double, from the mesh,
-// and a split that leaves every triangle on one side there is refused
+// the choice of a split; partition classifies from them only the triangles
+// whose float distances are further from every threshold than float's
+// error can reach (so exactly as in double), and the others in double,
+// from the mesh. A split that leaves every triangle on one side is refused
 // (buildNode). Float halves the memory the counting reads and doubles the
 // triangles an SSE instruction takes.
 struct Columns {
@@ -119,19 +174,24 @@ struct Columns {
   std::vector<float> low[3], high[3];
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   std::size_t size = 0;
+  // size rounded up to four: the lanes past the triangles hold NaN, which
+  // every comparison of the tally finds false, so a padded lane counts on
+  // no side and four at a time needs no one-by-one tail.
+  std::size_t padded = 0;
 
-  void gather(const std::vector<std::uint32_t>& triangles, const Mesh& mesh,
+  void gather(const IndexList& triangles, const Mesh& mesh,
               const std::vector<Eigen::Vector3d>& faceNormals, const Eigen::Vector3d& near) {
     size = triangles.size();
+    padded = (size + 3) & ~std::size_t(3);
     origin = near;
     // Only grown: a node smaller than an earlier one reuses the columns as they are.
-    if (normal[0].size() < size) {
+    if (normal[0].size() < padded) {
       for (auto& c : corner)
-        for (auto& axis : c) axis.resize(size);
+        for (auto& axis : c) axis.resize(padded);
       for (int axis = 0; axis < 3; ++axis) {
-        normal[axis].resize(size);
-        low[axis].resize(size);
-        high[axis].resize(size);
+        normal[axis].resize(padded);
+        low[axis].resize(padded);
+        high[axis].resize(padded);
       }
     }
     float* cornerOut[3][3];
@@ -143,7 +203,52 @@ struct Columns {
       highOut[axis] = high[axis].data();
     }
     const double originAt[3] = {origin.x(), origin.y(), origin.z()};
-    for (std::size_t i = 0; i < size; ++i) {
+    std::size_t i = 0;
+#ifdef __SSE2__
+    // Four triangles at a time: each point (x, y, z) converted as one
+    // vector, four of them turned into columns by a transpose. The same
+    // floats: the same double subtraction and rounding, and
+    // _mm_min_ps(b, a) is std::min(a, b) to the bit (so is max).
+    const __m128d originXy = _mm_loadu_pd(originAt), originZ = _mm_load_sd(originAt + 2);
+    const auto point = [](const double* at, __m128d shiftXy, __m128d shiftZ) {
+      return _mm_movelh_ps(_mm_cvtpd_ps(_mm_sub_pd(_mm_loadu_pd(at), shiftXy)),
+                           _mm_cvtpd_ps(_mm_sub_sd(_mm_load_sd(at + 2), shiftZ)));
+    };
+    const __m128d noShift = _mm_setzero_pd();
+    // One column each of x, y and z for four points (x, y, z) of four
+    // triangles; ((x, y, z, 0) rows turned into columns, the fourth dropped).
+    const auto columnsOf = [&](const double* p0, const double* p1, const double* p2,
+                               const double* p3, __m128d shiftXy, __m128d shiftZ, __m128 out[3]) {
+      __m128 r0 = point(p0, shiftXy, shiftZ), r1 = point(p1, shiftXy, shiftZ),
+             r2 = point(p2, shiftXy, shiftZ), r3 = point(p3, shiftXy, shiftZ);
+      _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+      out[0] = r0;
+      out[1] = r1;
+      out[2] = r2;
+    };
+    for (; i + 4 <= size; i += 4) {
+      const std::uint32_t t0 = triangles[i], t1 = triangles[i + 1], t2 = triangles[i + 2],
+                          t3 = triangles[i + 3];
+      const std::array<std::uint32_t, 3>&c0 = mesh.triangles[t0], &c1 = mesh.triangles[t1],
+                                      &c2 = mesh.triangles[t2], &c3 = mesh.triangles[t3];
+      __m128 a[3], b[3], c[3], facing[3];
+      const auto vertex = [&](std::uint32_t v) { return mesh.vertices[v].data(); };
+      columnsOf(vertex(c0[0]), vertex(c1[0]), vertex(c2[0]), vertex(c3[0]), originXy, originZ, a);
+      columnsOf(vertex(c0[1]), vertex(c1[1]), vertex(c2[1]), vertex(c3[1]), originXy, originZ, b);
+      columnsOf(vertex(c0[2]), vertex(c1[2]), vertex(c2[2]), vertex(c3[2]), originXy, originZ, c);
+      columnsOf(faceNormals[t0].data(), faceNormals[t1].data(), faceNormals[t2].data(),
+                faceNormals[t3].data(), noShift, noShift, facing);
+      for (int axis = 0; axis < 3; ++axis) {
+        _mm_storeu_ps(cornerOut[0][axis] + i, a[axis]);
+        _mm_storeu_ps(cornerOut[1][axis] + i, b[axis]);
+        _mm_storeu_ps(cornerOut[2][axis] + i, c[axis]);
+        _mm_storeu_ps(normalOut[axis] + i, facing[axis]);
+        _mm_storeu_ps(lowOut[axis] + i, _mm_min_ps(c[axis], _mm_min_ps(b[axis], a[axis])));
+        _mm_storeu_ps(highOut[axis] + i, _mm_max_ps(c[axis], _mm_max_ps(b[axis], a[axis])));
+      }
+    }
+#endif
+    for (; i < size; ++i) {
       const std::uint32_t t = triangles[i];
       const std::array<std::uint32_t, 3>& corners = mesh.triangles[t];
       const double* at[3] = {mesh.vertices[corners[0]].data(), mesh.vertices[corners[1]].data(),
@@ -163,6 +268,15 @@ struct Columns {
       fill(0);
       fill(1);
       fill(2);
+    }
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (int axis = 0; axis < 3; ++axis) {
+      for (std::size_t i = size; i < padded; ++i) {
+        for (int k = 0; k < 3; ++k) cornerOut[k][axis][i] = nan;
+        normalOut[axis][i] = nan;
+        lowOut[axis][i] = nan;
+        highOut[axis][i] = nan;
+      }
     }
   }
 };
@@ -189,27 +303,49 @@ struct Tally {
 // Tally on four triangles at once: the same decisions, lane by lane.
 struct TallySse2 {
   __m128 above, below, zero = _mm_setzero_ps();
-  __m128i front = _mm_setzero_si128(), back = _mm_setzero_si128(), both = _mm_setzero_si128();
+  __m128i front = _mm_setzero_si128(), back = _mm_setzero_si128();
   explicit TallySse2(float tolerance)
       : above(_mm_set1_ps(tolerance)), below(_mm_set1_ps(-tolerance)) {}
-  void add(__m128 lowest, __m128 highest, __m128 facing) {
+  // `facing()` gives the lanes' facings; it is called only when a lane
+  // lies in the plane, which few do (for most four, the side follows from
+  // the distances alone).
+  template <class Facing>
+  void add(__m128 lowest, __m128 highest, const Facing& facing) {
     const __m128 inPlane = _mm_and_ps(_mm_cmple_ps(highest, above), _mm_cmpge_ps(lowest, below));
-    const __m128 facesFront = _mm_cmpge_ps(facing, zero);
-    const __m128 reachesFront = _mm_or_ps(_mm_and_ps(inPlane, facesFront),
-                                          _mm_andnot_ps(inPlane, _mm_cmpgt_ps(highest, below)));
-    const __m128 reachesBack = _mm_or_ps(_mm_andnot_ps(facesFront, inPlane),
-                                         _mm_andnot_ps(inPlane, _mm_cmplt_ps(lowest, above)));
+    __m128 reachesFront = _mm_cmpgt_ps(highest, below);
+    __m128 reachesBack = _mm_cmplt_ps(lowest, above);
+    if (_mm_movemask_ps(inPlane)) {
+      const __m128 facesFront = _mm_cmpge_ps(facing(), zero);
+      reachesFront =
+          _mm_or_ps(_mm_and_ps(inPlane, facesFront), _mm_andnot_ps(inPlane, reachesFront));
+      reachesBack =
+          _mm_or_ps(_mm_andnot_ps(facesFront, inPlane), _mm_andnot_ps(inPlane, reachesBack));
+    }
     // A mask lane is all ones, -1 as an integer: subtracting counts it.
-    front = _mm_sub_epi32(front, _mm_castps_si128(_mm_andnot_ps(reachesBack, reachesFront)));
-    back = _mm_sub_epi32(back, _mm_castps_si128(_mm_andnot_ps(reachesFront, reachesBack)));
-    both = _mm_sub_epi32(both, _mm_castps_si128(_mm_and_ps(reachesFront, reachesBack)));
+    // `front` and `back` count all that reach the side; counts() finds
+    // those reaching both from them.
+    front = _mm_sub_epi32(front, _mm_castps_si128(reachesFront));
+    back = _mm_sub_epi32(back, _mm_castps_si128(reachesBack));
   }
-  static std::size_t sum(__m128i v) {
-    std::uint32_t lanes[4];
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(lanes), v);
-    return std::size_t(lanes[0]) + lanes[1] + lanes[2] + lanes[3];
+  // `triangles`: the lanes added that hold a triangle (not padding). Each
+  // reaches a side: out of the plane its highest distance is above the
+  // tolerance (so above minus it) or its lowest below minus the tolerance,
+  // and in it its facing, a finite number, is >= 0 or not. (A NaN
+  // coordinate would break this and skew the counts, which only guide the
+  // choice: partition decides the lists.) So the triangles reaching both
+  // sides are those counted twice.
+  Counts counts(std::size_t triangles) const {
+    // Both lane sums at once: lanes interleaved, (f0 + f2, b0 + b2, f1 +
+    // f3, b1 + b3), then its halves added.
+    const __m128i pairs =
+        _mm_add_epi32(_mm_unpacklo_epi32(front, back), _mm_unpackhi_epi32(front, back));
+    const __m128i totals = _mm_add_epi32(pairs, _mm_unpackhi_epi64(pairs, pairs));
+    const std::size_t reachFront = static_cast<std::uint32_t>(_mm_cvtsi128_si32(totals));
+    const std::size_t reachBack =
+        static_cast<std::uint32_t>(_mm_cvtsi128_si32(_mm_shuffle_epi32(totals, 1)));
+    const std::size_t inBoth = reachFront + reachBack - triangles;
+    return {reachFront - inBoth, reachBack - inBoth, inBoth};
   }
-  Counts counts() const { return {sum(front), sum(back), sum(both)}; }
 };
 #endif
 
@@ -229,13 +365,20 @@ Counts countAxisSplit(const Columns& c, std::size_t begin, std::size_t end, int 
 #ifdef __SSE2__
   TallySse2 lanes(tolerance);
   const __m128 vd = _mm_set1_ps(distance);
-  // Negation flips the sign bit, exactly.
-  const __m128 flip = _mm_set1_ps(flipped ? -0.0f : 0.0f);
-  for (; i + 4 <= end; i += 4)
-    lanes.add(_mm_sub_ps(_mm_xor_ps(_mm_loadu_ps(low + i), flip), vd),
-              _mm_sub_ps(_mm_xor_ps(_mm_loadu_ps(high + i), flip), vd),
-              _mm_xor_ps(_mm_loadu_ps(normal + i), flip));
-  counts = lanes.counts();
+  if (flipped) {
+    // Negation flips the sign bit, exactly.
+    const __m128 flip = _mm_set1_ps(-0.0f);
+    for (; i + 4 <= end; i += 4)
+      lanes.add(_mm_sub_ps(_mm_xor_ps(_mm_loadu_ps(low + i), flip), vd),
+                _mm_sub_ps(_mm_xor_ps(_mm_loadu_ps(high + i), flip), vd),
+                [&] { return _mm_xor_ps(_mm_loadu_ps(normal + i), flip); });
+  } else {
+    // The axis quantiles: most of the axis candidates.
+    for (; i + 4 <= end; i += 4)
+      lanes.add(_mm_sub_ps(_mm_loadu_ps(low + i), vd), _mm_sub_ps(_mm_loadu_ps(high + i), vd),
+                [&] { return _mm_loadu_ps(normal + i); });
+  }
+  counts = lanes.counts(std::min(i, c.size) - std::min(begin, c.size));
 #endif
   Tally tally;
   for (; i < end; ++i)
@@ -256,23 +399,23 @@ Counts countSplit(const Columns& c, std::size_t begin, std::size_t end, const Ei
                vd = _mm_set1_ps(distance);
   TallySse2 lanes(tolerance);
   for (; i + 4 <= end; i += 4) {
-    __m128 lowest = _mm_set1_ps(std::numeric_limits<float>::infinity());
-    __m128 highest = _mm_set1_ps(-std::numeric_limits<float>::infinity());
-    for (int k = 0; k < 3; ++k) {
-      const __m128 s =
-          _mm_sub_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(vx, _mm_loadu_ps(&c.corner[k][0][i])),
-                                           _mm_mul_ps(vy, _mm_loadu_ps(&c.corner[k][1][i]))),
-                                _mm_mul_ps(vz, _mm_loadu_ps(&c.corner[k][2][i]))),
-                     vd);
-      lowest = _mm_min_ps(lowest, s);
-      highest = _mm_max_ps(highest, s);
-    }
-    const __m128 facing = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(&c.normal[0][i]), vx),
-                                                _mm_mul_ps(_mm_loadu_ps(&c.normal[1][i]), vy)),
-                                     _mm_mul_ps(_mm_loadu_ps(&c.normal[2][i]), vz));
-    lanes.add(lowest, highest, facing);
+    const auto along = [&](int k) {
+      return _mm_add_ps(_mm_add_ps(_mm_mul_ps(vx, _mm_loadu_ps(&c.corner[k][0][i])),
+                                   _mm_mul_ps(vy, _mm_loadu_ps(&c.corner[k][1][i]))),
+                        _mm_mul_ps(vz, _mm_loadu_ps(&c.corner[k][2][i])));
+    };
+    const __m128 s0 = along(0), s1 = along(1), s2 = along(2);
+    // The offset subtracted after the lowest and highest are found: float
+    // subtraction is monotonic, so they are those of the differences.
+    const __m128 lowest = _mm_sub_ps(_mm_min_ps(_mm_min_ps(s0, s1), s2), vd);
+    const __m128 highest = _mm_sub_ps(_mm_max_ps(_mm_max_ps(s0, s1), s2), vd);
+    lanes.add(lowest, highest, [&] {
+      return _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(&c.normal[0][i]), vx),
+                                   _mm_mul_ps(_mm_loadu_ps(&c.normal[1][i]), vy)),
+                        _mm_mul_ps(_mm_loadu_ps(&c.normal[2][i]), vz));
+    });
   }
-  counts = lanes.counts();
+  counts = lanes.counts(std::min(i, c.size) - std::min(begin, c.size));
 #endif
   Tally tally;
   for (; i < end; ++i) {
@@ -362,11 +505,7 @@ class TreeBuilder {
     if (settings_.candidates != SplitCandidates::Triangle)
       runParallel(pool_, 3, 1, [&](int, std::size_t first, std::size_t last) {
         for (std::size_t axis = first; axis < last; ++axis) {
-          std::vector<std::pair<double, std::uint32_t>> keyed(all.size());
-          for (std::uint32_t i = 0; i < all.size(); ++i) keyed[i] = {centroids_[i][axis], i};
-          std::sort(keyed.begin(), keyed.end());
-          all.byAxis[axis].resize(all.size());
-          for (std::uint32_t i = 0; i < all.size(); ++i) all.byAxis[axis][i] = keyed[i].second;
+          sortByCoordinate(int(axis), all.byAxis[axis]);
         }
       });
     Box bounds{mesh_.vertices.front(), mesh_.vertices.front()};
@@ -398,6 +537,44 @@ class TreeBuilder {
   }
 
  private:
+  // The mesh's triangles in order of their centroids' coordinate on `axis`,
+  // ties in order of index: the order of sorted (coordinate, index) pairs,
+  // by a stable radix sort of the coordinates' bits made to order as the
+  // numbers do (sign bit set on the positive, all bits flipped on the
+  // negative; -0 first made +0, which it equals). Six passes of 11 bits
+  // (few buckets to clear for a small mesh), a pass skipped where every
+  // key has the same digit.
+  void sortByCoordinate(int axis, IndexList& out) const {
+    const std::size_t n = centroids_.size();
+    std::vector<std::uint64_t> keys(n), keysTo(n);
+    IndexList order(n), orderTo(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double value = centroids_[i][axis] + 0.0;
+      std::uint64_t bits;
+      std::memcpy(&bits, &value, sizeof bits);
+      keys[i] = bits >> 63 ? ~bits : bits | (std::uint64_t(1) << 63);
+      order[i] = static_cast<std::uint32_t>(i);
+    }
+    constexpr int kDigitBits = 11;
+    constexpr std::uint64_t kDigit = (std::uint64_t(1) << kDigitBits) - 1;
+    std::vector<std::size_t> start(std::size_t(1) << kDigitBits);
+    for (int shift = 0; shift < 64; shift += kDigitBits) {
+      std::fill(start.begin(), start.end(), 0);
+      for (const std::uint64_t key : keys) ++start[(key >> shift) & kDigit];
+      if (n && start[(keys[0] >> shift) & kDigit] == n) continue;
+      std::size_t sum = 0;
+      for (std::size_t& s : start) sum += std::exchange(s, sum);
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t to = start[(keys[i] >> shift) & kDigit]++;
+        keysTo[to] = keys[i];
+        orderTo[to] = order[i];
+      }
+      keys.swap(keysTo);
+      order.swap(orderTo);
+    }
+    out = std::move(order);
+  }
+
   // A part of the tree built on one thread, into its own arrays.
   struct Subtree {
     Lists lists;
@@ -420,7 +597,8 @@ class TreeBuilder {
         depth < settings_.maxDepth)
       split = chooseSplit(triangles, cell, scratch_.front(), pool_);
     Lists front, back;
-    if (!split || !partition(triangles, *split, front, back, scratch_.front().side)) {
+    if (!split || !partition(triangles, *split, scratch_.front().columns, depth + 1, front, back,
+                             scratch_.front().side)) {
       subtrees_.push_back({std::move(triangles), cell, depth, share, {}, -1});
       return -static_cast<std::int32_t>(subtrees_.size());
     }
@@ -428,9 +606,9 @@ class TreeBuilder {
     top_.push_back({*split});
     const double whole = double(front.size() + back.size());
     const double backShare = share * double(back.size()) / whole;
-    const Box backCell = cell.clipped(*split, false);
+    const auto [frontCell, backCell] = cell.clippedBoth(*split);
     const std::int32_t frontChild =
-        expand(front, cell.clipped(*split, true), depth + 1, share * double(front.size()) / whole);
+        expand(front, frontCell, depth + 1, share * double(front.size()) / whole);
     const std::int32_t backChild = expand(back, backCell, depth + 1, backShare);
     top_[std::size_t(index)].front = frontChild;
     top_[std::size_t(index)].back = backChild;
@@ -461,18 +639,22 @@ class TreeBuilder {
   // Splits `triangles` (emptied) into the two sides' lists, in their order;
   // `side` is working memory, one entry a mesh triangle. A triangle lying in
   // the plane goes to the side its normal faces; a corner within the
-  // tolerance of a side counts as reaching it. In double, from the mesh:
-  // a cell's lists are complete whatever float made of the counts. False,
-  // with `triangles` left as they were, when every triangle would reach one
-  // side: the split makes no progress (the float counts said it did, which
-  // only a triangle at the tolerance's edge can make them say).
-  bool partition(Lists& triangles, const Split& split, Lists& front, Lists& back,
+  // tolerance of a side counts as reaching it. In double, from the mesh, or
+  // equivalently from `columns` (the node's triangles in the order of
+  // `triangles`, gathered by chooseSplit) where float is provably
+  // decisive: a cell's lists are complete whatever float made of the
+  // counts. False, with `triangles` left as they were, when every triangle
+  // would reach one side: the split makes no progress (the float counts
+  // said it did, which only a triangle at the tolerance's edge can make
+  // them say). `childDepth`: the children's depth, which with their sizes
+  // tells whether they will be split (and need their axis orders).
+  bool partition(Lists& triangles, const Split& split, const Columns& columns,
+                 std::uint32_t childDepth, Lists& front, Lists& back,
                  std::vector<std::uint8_t>& side) const {
     side.resize(mesh_.triangles.size());
     const double nx = split.normal.x(), ny = split.normal.y(), nz = split.normal.z();
     const double distance = split.distance, tolerance = onPlaneTolerance(split);
-    std::size_t toFront = 0, toBack = 0;
-    for (const std::uint32_t t : triangles.order) {
+    const auto classifyInDouble = [&](std::uint32_t t) {
       double lowest = std::numeric_limits<double>::infinity();
       double highest = -lowest;
       for (int k = 0; k < 3; ++k) {
@@ -486,34 +668,152 @@ class TreeBuilder {
       const bool inPlane = highest <= tolerance && lowest >= -tolerance;
       const bool reachesFront = inPlane ? facing >= 0 : highest > -tolerance;
       const bool reachesBack = inPlane ? facing < 0 : lowest < tolerance;
-      side[t] = std::uint8_t((reachesFront ? kFront : 0) | (reachesBack ? kBack : 0));
-      toFront += reachesFront;
-      toBack += reachesBack;
+      return std::uint8_t((reachesFront ? kFront : 0) | (reachesBack ? kBack : 0));
+    };
+    std::size_t toFront = 0, toBack = 0;
+    std::size_t i = 0;
+#ifdef __SSE2__
+    // A float signed distance differs from partition's double one by less
+    // than `error`: the corners' and the offset's rounding to float (half
+    // an ulp each), float's four operations on them, and double's rounding
+    // of the distance and of its own evaluation, all bounded generously.
+    // Where the lowest and highest distances are each further than that
+    // from the four thresholds (+-tolerance), every comparison comes out
+    // as in double; and a triangle in the plane whose float facing is
+    // further from 0 than the normal's rounding can move it faces the same
+    // side. Any other triangle is classified in double.
+    const double offset = distance - split.normal.cast<double>().dot(columns.origin);
+    const auto offsetFloat = static_cast<float>(offset);
+    const double unit = std::ldexp(1.0, -24);
+    // The largest distance of a corner from the origin along each axis.
+    double extent[3];
+    for (int axis = 0; axis < 3; ++axis) {
+      __m128 lowest = _mm_setzero_ps(), highest = _mm_setzero_ps();
+      for (std::size_t j = 0; j + 4 <= columns.size; j += 4) {
+        lowest = _mm_min_ps(lowest, _mm_loadu_ps(&columns.low[axis][j]));
+        highest = _mm_max_ps(highest, _mm_loadu_ps(&columns.high[axis][j]));
+      }
+      float lanes[8];
+      _mm_storeu_ps(lanes, lowest);
+      _mm_storeu_ps(lanes + 4, highest);
+      extent[axis] = 0;
+      for (const float lane : lanes) extent[axis] = std::max(extent[axis], double(std::abs(lane)));
+    }
+    const double spread =
+        std::abs(nx) * extent[0] + std::abs(ny) * extent[1] + std::abs(nz) * extent[2];
+    const double far = std::abs(nx * columns.origin.x()) + std::abs(ny * columns.origin.y()) +
+                       std::abs(nz * columns.origin.z()) + std::abs(distance) + spread;
+    const double error =
+        8 * unit * (spread + std::abs(offset)) + std::ldexp(far, -46) + 4 * unit * tolerance;
+    // Bands around the thresholds, widened for their own rounding to float.
+    const double widened = error * (1 + 8 * unit) + 1e-30;
+    const auto bandLow = [&](double threshold) {
+      return _mm_set1_ps(static_cast<float>(threshold - widened - 4 * unit * std::abs(threshold)));
+    };
+    const auto bandHigh = [&](double threshold) {
+      return _mm_set1_ps(static_cast<float>(threshold + widened + 4 * unit * std::abs(threshold)));
+    };
+    const __m128 aboveLow = bandLow(tolerance), aboveHigh = bandHigh(tolerance);
+    const __m128 belowLow = bandLow(-tolerance), belowHigh = bandHigh(-tolerance);
+    const __m128 above = _mm_set1_ps(static_cast<float>(tolerance)),
+                 below = _mm_set1_ps(static_cast<float>(-tolerance));
+    const __m128 facingBand = _mm_set1_ps(1e-5f);
+    const __m128 vx = _mm_set1_ps(split.normal.x()), vy = _mm_set1_ps(split.normal.y()),
+                 vz = _mm_set1_ps(split.normal.z()), vd = _mm_set1_ps(offsetFloat);
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 signBit = _mm_set1_ps(-0.0f);
+    const auto within = [](__m128 value, __m128 lowEdge, __m128 highEdge) {
+      return _mm_and_ps(_mm_cmpge_ps(value, lowEdge), _mm_cmple_ps(value, highEdge));
+    };
+    const std::uint32_t* order = triangles.order.data();
+    for (; i + 4 <= columns.size; i += 4) {
+      const auto along = [&](int k) {
+        return _mm_sub_ps(
+            _mm_add_ps(_mm_add_ps(_mm_mul_ps(vx, _mm_loadu_ps(&columns.corner[k][0][i])),
+                                  _mm_mul_ps(vy, _mm_loadu_ps(&columns.corner[k][1][i]))),
+                       _mm_mul_ps(vz, _mm_loadu_ps(&columns.corner[k][2][i]))),
+            vd);
+      };
+      const __m128 s0 = along(0), s1 = along(1), s2 = along(2);
+      const __m128 lowest = _mm_min_ps(_mm_min_ps(s0, s1), s2);
+      const __m128 highest = _mm_max_ps(_mm_max_ps(s0, s1), s2);
+      const __m128 facing =
+          _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(&columns.normal[0][i]), vx),
+                                _mm_mul_ps(_mm_loadu_ps(&columns.normal[1][i]), vy)),
+                     _mm_mul_ps(_mm_loadu_ps(&columns.normal[2][i]), vz));
+      const __m128 inPlane = _mm_and_ps(_mm_cmple_ps(highest, above), _mm_cmpge_ps(lowest, below));
+      const __m128 unsure = _mm_or_ps(
+          _mm_or_ps(
+              _mm_or_ps(within(lowest, aboveLow, aboveHigh), within(lowest, belowLow, belowHigh)),
+              _mm_or_ps(within(highest, aboveLow, aboveHigh),
+                        within(highest, belowLow, belowHigh))),
+          _mm_and_ps(inPlane, _mm_cmple_ps(_mm_andnot_ps(signBit, facing), facingBand)));
+      const __m128 facesFront = _mm_cmpge_ps(facing, zero);
+      const __m128 reachesFront = _mm_or_ps(_mm_and_ps(inPlane, facesFront),
+                                            _mm_andnot_ps(inPlane, _mm_cmpgt_ps(highest, below)));
+      const __m128 reachesBack = _mm_or_ps(_mm_andnot_ps(facesFront, inPlane),
+                                           _mm_andnot_ps(inPlane, _mm_cmplt_ps(lowest, above)));
+      const int frontBits = _mm_movemask_ps(reachesFront), backBits = _mm_movemask_ps(reachesBack),
+                unsureBits = _mm_movemask_ps(unsure);
+      for (int lane = 0; lane < 4; ++lane) {
+        const std::uint32_t t = order[i + std::size_t(lane)];
+        const std::uint8_t sides = (unsureBits >> lane) & 1
+                                       ? classifyInDouble(t)
+                                       : std::uint8_t(((frontBits >> lane) & 1) * kFront |
+                                                      ((backBits >> lane) & 1) * kBack);
+        side[t] = sides;
+        toFront += sides & kFront;
+        toBack += sides >> 1;
+      }
+    }
+#endif
+    for (; i < triangles.size(); ++i) {
+      const std::uint32_t t = triangles.order[i];
+      const std::uint8_t sides = classifyInDouble(t);
+      side[t] = sides;
+      toFront += sides & kFront;
+      toBack += sides >> 1;
     }
     if (toFront == triangles.size() || toBack == triangles.size()) return false;
-    const auto share = [&](std::vector<std::uint32_t>& from,
-                           std::vector<std::uint32_t>& toFrontList,
-                           std::vector<std::uint32_t>& toBackList) {
+    // A side's list is written when wanted: a child that will be a leaf
+    // (few triangles, or at the depth limit) never reads its axis orders.
+    const auto share = [&](IndexList& from, IndexList& toFrontList, IndexList& toBackList,
+                           bool wantFront, bool wantBack) {
       if (from.empty()) return;
       // One spare slot each: the write past a side's last kept entry.
-      toFrontList.resize(toFront + 1);
-      toBackList.resize(toBack + 1);
+      if (wantFront) toFrontList.resize(toFront + 1);
+      if (wantBack) toBackList.resize(toBack + 1);
       std::uint32_t *frontOut = toFrontList.data(), *backOut = toBackList.data();
       // Written unconditionally, kept by the side's bit: no branch to mispredict.
-      for (const std::uint32_t t : from) {
-        *frontOut = t;
-        *backOut = t;
-        frontOut += side[t] & kFront;
-        backOut += (side[t] & kBack) >> 1;
-      }
-      toFrontList.pop_back();
-      toBackList.pop_back();
+      if (wantFront && wantBack)
+        for (const std::uint32_t t : from) {
+          *frontOut = t;
+          *backOut = t;
+          frontOut += side[t] & kFront;
+          backOut += (side[t] & kBack) >> 1;
+        }
+      else if (wantFront)
+        for (const std::uint32_t t : from) {
+          *frontOut = t;
+          frontOut += side[t] & kFront;
+        }
+      else if (wantBack)
+        for (const std::uint32_t t : from) {
+          *backOut = t;
+          backOut += (side[t] & kBack) >> 1;
+        }
+      if (wantFront) toFrontList.pop_back();
+      if (wantBack) toBackList.pop_back();
       from.clear();
       from.shrink_to_fit();
     };
-    share(triangles.order, front.order, back.order);
+    share(triangles.order, front.order, back.order, true, true);
+    const auto splitFurther = [&](std::size_t count) {
+      return count > settings_.maxLeafTriangles && childDepth < settings_.maxDepth;
+    };
     for (int axis = 0; axis < 3; ++axis)
-      share(triangles.byAxis[axis], front.byAxis[axis], back.byAxis[axis]);
+      share(triangles.byAxis[axis], front.byAxis[axis], back.byAxis[axis], splitFurther(toFront),
+            splitFurther(toBack));
     return true;
   }
 
@@ -545,10 +845,12 @@ class TreeBuilder {
       // + 0.0f: -0 and +0, equal to ==, hash alike.
       const float key[4] = {split.normal.x() + 0.0f, split.normal.y() + 0.0f,
                             split.normal.z() + 0.0f, split.distance + 0.0f};
-      std::uint32_t bits[4];
-      std::memcpy(bits, key, sizeof bits);
-      std::uint64_t hash = 0;
-      for (const std::uint32_t b : bits) hash = (hash ^ b) * 0x9E3779B97F4A7C15ull;
+      // Two words, two multiplications: the hash only picks the first slot
+      // tried, never which candidates are kept or their order.
+      std::uint64_t words[2];
+      std::memcpy(words, key, sizeof words);
+      const std::uint64_t hash =
+          ((words[0] * 0x9E3779B97F4A7C15ull) ^ words[1]) * 0xC2B2AE3D27D4EB4Full;
       for (std::size_t slot = std::size_t(hash >> 40) & (tableSize - 1);;
            slot = (slot + 1) & (tableSize - 1)) {
         if (slots[slot] < 0) {
@@ -561,7 +863,7 @@ class TreeBuilder {
       }
     };
     const auto n = lists.size();
-    const std::vector<std::uint32_t>& triangles = lists.order;
+    const IndexList& triangles = lists.order;
     if (settings_.candidates != SplitCandidates::Triangle) {
       const std::uint32_t quantiles = settings_.axisCandidatesPerAxis;
       for (int axis = 0; axis < 3; ++axis) {
@@ -595,7 +897,7 @@ class TreeBuilder {
   // Per-thread working memory of the split search.
   struct Scratch {
     Columns columns, sampleColumns;
-    std::vector<std::uint32_t> sample;
+    IndexList sample;
     std::vector<std::uint8_t> side;
     std::vector<std::int32_t> slots;
     std::vector<Candidate> candidates, shortlist;
@@ -615,7 +917,8 @@ class TreeBuilder {
   // threads, each block's counts kept apart and summed in order.
   static void countAll(const std::vector<Candidate>& candidates, const Columns& columns,
                        Scratch& scratch, bspf::ThreadPool* pool, std::vector<Counts>& out) {
-    const std::size_t n = columns.size, m = candidates.size();
+    // The padded size: a block's end is a multiple of four.
+    const std::size_t n = columns.padded, m = candidates.size();
     const std::size_t blocks = (n + kBlock - 1) / kBlock;
     scratch.blockCounts.resize(blocks * m);
     runParallel(pool, blocks, 1, [&](int, std::size_t first, std::size_t last) {
@@ -719,7 +1022,7 @@ class TreeBuilder {
       const double whole = cell.reachVolume(reach);
       for (const auto& [score, i] : scratch.ranked) {
         auto& c = scratch.counted[i];
-        if (!c.cells) c.cells = {cell.clipped(c.split, true), cell.clipped(c.split, false)};
+        if (!c.cells) c.cells = cell.clippedBoth(c.split);
         const double cost = 1.0 + (c.cells->first.reachVolume(reach) * c.frontTotal +
                                    c.cells->second.reachVolume(reach) * c.backTotal) /
                                       whole;
@@ -734,7 +1037,7 @@ class TreeBuilder {
   }
 
   std::int32_t makeLeaf(Lists& lists, std::uint32_t depth, double share, BspTree& tree) {
-    std::vector<std::uint32_t>& triangles = lists.order;
+    IndexList& triangles = lists.order;
     std::sort(triangles.begin(), triangles.end());
     const auto first = static_cast<std::uint32_t>(tree.leafTriangles.size());
     tree.leafTriangles.insert(tree.leafTriangles.end(), triangles.begin(), triangles.end());
@@ -765,7 +1068,8 @@ class TreeBuilder {
       return makeLeaf(triangles, depth, share, tree);
     const std::optional<Split> split = chooseSplit(triangles, cell, scratch, nullptr);
     Lists front, back;
-    if (!split || !partition(triangles, *split, front, back, scratch.side))
+    if (!split ||
+        !partition(triangles, *split, scratch.columns, depth + 1, front, back, scratch.side))
       return makeLeaf(triangles, depth, share, tree);
     const double whole = double(front.size() + back.size());
     const double frontShare = share * double(front.size()) / whole;
@@ -773,10 +1077,10 @@ class TreeBuilder {
 
     const auto index = static_cast<std::int32_t>(tree.nodes.size());
     tree.nodes.emplace_back();
+    const auto [frontCell, backCell] = cell.clippedBoth(*split);
     const std::int32_t frontChild =
-        buildNode(front, cell.clipped(*split, true), depth + 1, frontShare, tree, scratch);
-    const std::int32_t backChild =
-        buildNode(back, cell.clipped(*split, false), depth + 1, backShare, tree, scratch);
+        buildNode(front, frontCell, depth + 1, frontShare, tree, scratch);
+    const std::int32_t backChild = buildNode(back, backCell, depth + 1, backShare, tree, scratch);
     tree.nodes[std::size_t(index)] = bspf::schema::Node(toPlane(*split), frontChild, backChild);
     return index;
   }
