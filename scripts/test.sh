@@ -3,10 +3,12 @@
 # The whole test suite: install what is needed; build with AddressSanitizer
 # and UndefinedBehaviorSanitizer and run the tests that feed hostile input;
 # build with ThreadSanitizer and run the threading tests; fuzz each libFuzzer
-# target for a minute (scripts/fuzz.sh); build everything with clang and run
-# its tests (scripts/clang-build.sh); cross-compile the runtime and its tests
-# for Windows and run them under wine (scripts/cross-windows.sh); then build
-# optimised with assertions on and run every test through ctest (its summary
+# target for a minute (scripts/fuzz.sh); build optimised with assertions on;
+# build everything with clang and run its tests (scripts/clang-build.sh);
+# cross-compile the runtime and its tests for Windows and run them under wine
+# (scripts/cross-windows.sh); check that the tree build's portable paths
+# write the same blobs as its SSE2 ones (scripts/check_portable_tree.sh);
+# then run every test of the optimised build through ctest (its summary
 # closes the output).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -50,5 +52,9 @@ if [ "${BSPF_SKIP_PORTS:-0}" != 1 ]; then
   # this build's bspc compiles the sample levels they open.
   BSPC=build-test/compiler/bspc timeout 900 scripts/cross-windows.sh
 fi
+
+# The tree build's portable paths, built on this CPU too, against its SSE2
+# paths: the same blobs.
+scripts/check_portable_tree.sh build-test/compiler/bspc
 
 (cd build-test && ctest -j"$jobs" --output-on-failure)

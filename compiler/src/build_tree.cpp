@@ -10,7 +10,11 @@
 #include <memory>
 #include <mutex>
 #include <optional>
-#ifdef __SSE2__
+// The SSE2 paths below have portable twins that give the same trees (every
+// CPU without SSE2 takes them). BSPC_PORTABLE_ONLY builds the twins on
+// x86-64 too, so scripts/test.sh can check that both give the same blobs.
+#if defined(__SSE2__) && !defined(BSPC_PORTABLE_ONLY)
+#define BSPC_SSE2 1
 #include <emmintrin.h>
 #endif
 #include <string>
@@ -204,7 +208,7 @@ struct Columns {
     }
     const double originAt[3] = {origin.x(), origin.y(), origin.z()};
     std::size_t i = 0;
-#ifdef __SSE2__
+#ifdef BSPC_SSE2
     // Four triangles at a time: each point (x, y, z) converted as one
     // vector, four of them turned into columns by a transpose. The same
     // floats: the same double subtraction and rounding, and
@@ -299,7 +303,7 @@ struct Tally {
   }
 };
 
-#ifdef __SSE2__
+#ifdef BSPC_SSE2
 // Tally on four triangles at once: the same decisions, lane by lane.
 struct TallySse2 {
   __m128 above, below, zero = _mm_setzero_ps();
@@ -362,7 +366,7 @@ Counts countAxisSplit(const Columns& c, std::size_t begin, std::size_t end, int 
   const float sign = flipped ? -1.0f : 1.0f;
   std::size_t i = begin;
   Counts counts;
-#ifdef __SSE2__
+#ifdef BSPC_SSE2
   TallySse2 lanes(tolerance);
   const __m128 vd = _mm_set1_ps(distance);
   if (flipped) {
@@ -394,7 +398,7 @@ Counts countSplit(const Columns& c, std::size_t begin, std::size_t end, const Ei
   const float nx = n.x(), ny = n.y(), nz = n.z();
   std::size_t i = begin;
   Counts counts;
-#ifdef __SSE2__
+#ifdef BSPC_SSE2
   const __m128 vx = _mm_set1_ps(nx), vy = _mm_set1_ps(ny), vz = _mm_set1_ps(nz),
                vd = _mm_set1_ps(distance);
   TallySse2 lanes(tolerance);
@@ -648,7 +652,8 @@ class TreeBuilder {
   // said it did, which only a triangle at the tolerance's edge can make
   // them say). `childDepth`: the children's depth, which with their sizes
   // tells whether they will be split (and need their axis orders).
-  bool partition(Lists& triangles, const Split& split, const Columns& columns,
+  // (`columns`: read by the SSE2 path only.)
+  bool partition(Lists& triangles, const Split& split, [[maybe_unused]] const Columns& columns,
                  std::uint32_t childDepth, Lists& front, Lists& back,
                  std::vector<std::uint8_t>& side) const {
     side.resize(mesh_.triangles.size());
@@ -672,7 +677,7 @@ class TreeBuilder {
     };
     std::size_t toFront = 0, toBack = 0;
     std::size_t i = 0;
-#ifdef __SSE2__
+#ifdef BSPC_SSE2
     // A float signed distance differs from partition's double one by less
     // than `error`: the corners' and the offset's rounding to float (half
     // an ulp each), float's four operations on them, and double's rounding
