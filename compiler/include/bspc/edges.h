@@ -69,6 +69,7 @@ class SolidEdges {
 
 /// Per triangle: whether dropCoveredFaces drops it.
 std::vector<bool> findCoveredFaces(const Mesh& mesh);
+/// The same, from `edges` of the mesh (shared with solidNeighbours).
 std::vector<bool> findCoveredFaces(const SolidEdges& edges);
 
 /// Per triangle, edge k (corner k to corner k + 1): the triangle across it
@@ -80,6 +81,7 @@ std::vector<bool> findCoveredFaces(const SolidEdges& edges);
 /// closed surfaces (findClosedPieces in mesh_checks.h). Precondition: a
 /// cleaned mesh.
 std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const Mesh& mesh);
+/// The same, from `edges` of the mesh (shared with findCoveredFaces).
 std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const SolidEdges& edges);
 
 /// A triangle's three edges (edge k from corner k to corner k + 1).
