@@ -285,14 +285,11 @@ struct Columns {
   }
 };
 
+// The triangles a split sends to the front only, the back only and both.
 struct Counts {
   std::size_t front = 0, back = 0, both = 0;
-};
-
-// Tallies partition's rule from each triangle's lowest and highest signed
-// distance and, for one lying in the plane, the side its normal faces.
-struct Tally {
-  std::size_t front = 0, back = 0, both = 0;
+  // Tallies partition's rule from a triangle's lowest and highest signed
+  // distance and, for one lying in the plane, the side its normal faces.
   void add(float lowest, float highest, float facing, float tolerance) {
     const bool inPlane = highest <= tolerance && lowest >= -tolerance;
     const bool reachesFront = inPlane ? facing >= 0 : highest > -tolerance;
@@ -301,10 +298,13 @@ struct Tally {
     back += reachesBack & !reachesFront;
     both += reachesFront & reachesBack;
   }
+  Counts operator+(const Counts& other) const {
+    return {front + other.front, back + other.back, both + other.both};
+  }
 };
 
 #ifdef BSPC_SSE2
-// Tally on four triangles at once: the same decisions, lane by lane.
+// Counts::add on four triangles at once: the same decisions, lane by lane.
 struct TallySse2 {
   __m128 above, below, zero = _mm_setzero_ps();
   __m128i front = _mm_setzero_si128(), back = _mm_setzero_si128();
@@ -384,10 +384,10 @@ Counts countAxisSplit(const Columns& c, std::size_t begin, std::size_t end, int 
   }
   counts = lanes.counts(std::min(i, c.size) - std::min(begin, c.size));
 #endif
-  Tally tally;
+  Counts tail;
   for (; i < end; ++i)
-    tally.add(sign * low[i] - distance, sign * high[i] - distance, sign * normal[i], tolerance);
-  return {counts.front + tally.front, counts.back + tally.back, counts.both + tally.both};
+    tail.add(sign * low[i] - distance, sign * high[i] - distance, sign * normal[i], tolerance);
+  return counts + tail;
 }
 
 // partition's rule, counted, for triangles [begin, end) of `c` against any
@@ -421,7 +421,7 @@ Counts countSplit(const Columns& c, std::size_t begin, std::size_t end, const Ei
   }
   counts = lanes.counts(std::min(i, c.size) - std::min(begin, c.size));
 #endif
-  Tally tally;
+  Counts tail;
   for (; i < end; ++i) {
     float lowest = std::numeric_limits<float>::infinity();
     float highest = -lowest;
@@ -432,9 +432,9 @@ Counts countSplit(const Columns& c, std::size_t begin, std::size_t end, const Ei
       highest = std::max(highest, s);
     }
     const float facing = (c.normal[0][i] * nx + c.normal[1][i] * ny) + c.normal[2][i] * nz;
-    tally.add(lowest, highest, facing, tolerance);
+    tail.add(lowest, highest, facing, tolerance);
   }
-  return {counts.front + tally.front, counts.back + tally.back, counts.both + tally.both};
+  return counts + tail;
 }
 
 // Runs `task(thread, first, last)` over [0, count) on `pool`, or on this
@@ -943,9 +943,7 @@ class TreeBuilder {
     out.assign(m, Counts{});
     for (std::size_t b = 0; b < blocks; ++b)
       for (std::size_t i = 0; i < m; ++i) {
-        out[i].front += scratch.blockCounts[b * m + i].front;
-        out[i].back += scratch.blockCounts[b * m + i].back;
-        out[i].both += scratch.blockCounts[b * m + i].both;
+        out[i] = out[i] + scratch.blockCounts[b * m + i];
       }
   }
 
