@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <exception>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -161,6 +162,35 @@ struct Lists {
   std::size_t size() const { return order.size(); }
 };
 
+// A node's per-triangle passes (gathering its columns, classifying and
+// sharing out its lists) run on a pool's threads above this many triangles,
+// in ranges of kParallelRange (a multiple of four): below it, waking the
+// threads costs more than they save.
+constexpr std::size_t kParallelAbove = 4096;
+constexpr std::size_t kParallelRange = 1024;
+
+// Runs `task(thread, first, last)` over [0, count) on `pool`, or on this
+// thread without one; an exception thrown by a task (out of memory) is
+// carried back to the caller instead of ending the process.
+void runParallel(bspf::ThreadPool* pool, std::size_t count, std::size_t chunk,
+                 const std::function<void(int, std::size_t, std::size_t)>& task) {
+  if (!pool) {
+    if (count) task(0, 0, count);
+    return;
+  }
+  std::mutex mutex;
+  std::exception_ptr failure;
+  pool->parallelFor(count, chunk, [&](int thread, std::size_t first, std::size_t last) {
+    try {
+      task(thread, first, last);
+    } catch (...) {
+      std::lock_guard lock(mutex);
+      if (!failure) failure = std::current_exception();
+    }
+  });
+  if (failure) std::rethrow_exception(failure);
+}
+
 // The node's triangles as columns of floats, for the split search: the
 // corners (relative to `origin`, near the node, so that float keeps them to
 // a small fraction of the on-plane tolerance), the face normal, and each
@@ -183,8 +213,11 @@ struct Columns {
   // no side and four at a time needs no one-by-one tail.
   std::size_t padded = 0;
 
+  // With a pool, a large node's columns are filled on all its threads, in
+  // ranges of whole fours: each triangle's floats are the same either way.
   void gather(const IndexList& triangles, const Mesh& mesh,
-              const std::vector<Eigen::Vector3d>& faceNormals, const Eigen::Vector3d& near) {
+              const std::vector<Eigen::Vector3d>& faceNormals, const Eigen::Vector3d& near,
+              bspf::ThreadPool* pool = nullptr) {
     size = triangles.size();
     padded = (size + 3) & ~std::size_t(3);
     origin = near;
@@ -198,6 +231,27 @@ struct Columns {
         high[axis].resize(padded);
       }
     }
+    if (pool && size > kParallelAbove)
+      runParallel(pool, size, kParallelRange, [&](int, std::size_t first, std::size_t last) {
+        fill(triangles, mesh, faceNormals, first, last);
+      });
+    else
+      fill(triangles, mesh, faceNormals, 0, size);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (int axis = 0; axis < 3; ++axis) {
+      for (std::size_t i = size; i < padded; ++i) {
+        for (int k = 0; k < 3; ++k) corner[k][axis][i] = nan;
+        normal[axis][i] = nan;
+        low[axis][i] = nan;
+        high[axis][i] = nan;
+      }
+    }
+  }
+
+ private:
+  // Columns [first, last) from triangles[first, last); `first` a multiple of four.
+  void fill(const IndexList& triangles, const Mesh& mesh,
+            const std::vector<Eigen::Vector3d>& faceNormals, std::size_t first, std::size_t last) {
     float* cornerOut[3][3];
     float *normalOut[3], *lowOut[3], *highOut[3];
     for (int axis = 0; axis < 3; ++axis) {
@@ -207,7 +261,7 @@ struct Columns {
       highOut[axis] = high[axis].data();
     }
     const double originAt[3] = {origin.x(), origin.y(), origin.z()};
-    std::size_t i = 0;
+    std::size_t i = first;
 #ifdef BSPC_SSE2
     // Four triangles at a time: each point (x, y, z) converted as one
     // vector, four of them turned into columns by a transpose. The same
@@ -230,7 +284,7 @@ struct Columns {
       out[1] = r1;
       out[2] = r2;
     };
-    for (; i + 4 <= size; i += 4) {
+    for (; i + 4 <= last; i += 4) {
       const std::uint32_t t0 = triangles[i], t1 = triangles[i + 1], t2 = triangles[i + 2],
                           t3 = triangles[i + 3];
       const std::array<std::uint32_t, 3>&c0 = mesh.triangles[t0], &c1 = mesh.triangles[t1],
@@ -252,13 +306,13 @@ struct Columns {
       }
     }
 #endif
-    for (; i < size; ++i) {
+    for (; i < last; ++i) {
       const std::uint32_t t = triangles[i];
       const std::array<std::uint32_t, 3>& corners = mesh.triangles[t];
       const double* at[3] = {mesh.vertices[corners[0]].data(), mesh.vertices[corners[1]].data(),
                              mesh.vertices[corners[2]].data()};
       const double* facing = faceNormals[t].data();
-      const auto fill = [&](int axis) {
+      const auto fillAxis = [&](int axis) {
         const auto a = static_cast<float>(at[0][axis] - originAt[axis]);
         const auto b = static_cast<float>(at[1][axis] - originAt[axis]);
         const auto c = static_cast<float>(at[2][axis] - originAt[axis]);
@@ -269,18 +323,9 @@ struct Columns {
         lowOut[axis][i] = std::min(std::min(a, b), c);
         highOut[axis][i] = std::max(std::max(a, b), c);
       };
-      fill(0);
-      fill(1);
-      fill(2);
-    }
-    const float nan = std::numeric_limits<float>::quiet_NaN();
-    for (int axis = 0; axis < 3; ++axis) {
-      for (std::size_t i = size; i < padded; ++i) {
-        for (int k = 0; k < 3; ++k) cornerOut[k][axis][i] = nan;
-        normalOut[axis][i] = nan;
-        lowOut[axis][i] = nan;
-        highOut[axis][i] = nan;
-      }
+      fillAxis(0);
+      fillAxis(1);
+      fillAxis(2);
     }
   }
 };
@@ -437,28 +482,6 @@ Counts countSplit(const Columns& c, std::size_t begin, std::size_t end, const Ei
   return counts + tail;
 }
 
-// Runs `task(thread, first, last)` over [0, count) on `pool`, or on this
-// thread without one; an exception thrown by a task (out of memory) is
-// carried back to the caller instead of ending the process.
-void runParallel(bspf::ThreadPool* pool, std::size_t count, std::size_t chunk,
-                 const std::function<void(int, std::size_t, std::size_t)>& task) {
-  if (!pool) {
-    if (count) task(0, 0, count);
-    return;
-  }
-  std::mutex mutex;
-  std::exception_ptr failure;
-  pool->parallelFor(count, chunk, [&](int thread, std::size_t first, std::size_t last) {
-    try {
-      task(thread, first, last);
-    } catch (...) {
-      std::lock_guard lock(mutex);
-      if (!failure) failure = std::current_exception();
-    }
-  });
-  if (failure) std::rethrow_exception(failure);
-}
-
 // Appends the subtree `part` (its own numbering, root `root`) to `tree`;
 // returns the root's reference in `tree`. Appended right after its parent's
 // earlier subtrees, it lands where a build on one thread puts it.
@@ -602,7 +625,7 @@ class TreeBuilder {
       split = chooseSplit(triangles, cell, scratch_.front(), pool_);
     Lists front, back;
     if (!split || !partition(triangles, *split, scratch_.front().columns, depth + 1, front, back,
-                             scratch_.front().side)) {
+                             scratch_.front().side, pool_)) {
       subtrees_.push_back({std::move(triangles), cell, depth, share, {}, -1});
       return -static_cast<std::int32_t>(subtrees_.size());
     }
@@ -653,9 +676,12 @@ class TreeBuilder {
   // them say). `childDepth`: the children's depth, which with their sizes
   // tells whether they will be split (and need their axis orders).
   // (`columns`: read by the SSE2 path only.)
+  // With `pool`, a large node is classified and its lists written on all
+  // the pool's threads: each triangle's side and each list's order are the
+  // same either way.
   bool partition(Lists& triangles, const Split& split, [[maybe_unused]] const Columns& columns,
                  std::uint32_t childDepth, Lists& front, Lists& back,
-                 std::vector<std::uint8_t>& side) const {
+                 std::vector<std::uint8_t>& side, bspf::ThreadPool* pool) const {
     side.resize(mesh_.triangles.size());
     const double nx = split.normal.x(), ny = split.normal.y(), nz = split.normal.z();
     const double distance = split.distance, tolerance = onPlaneTolerance(split);
@@ -675,8 +701,9 @@ class TreeBuilder {
       const bool reachesBack = inPlane ? facing < 0 : lowest < tolerance;
       return std::uint8_t((reachesFront ? kFront : 0) | (reachesBack ? kBack : 0));
     };
-    std::size_t toFront = 0, toBack = 0;
-    std::size_t i = 0;
+    // The triangles [first, last) classified, `first` a multiple of four;
+    // how many reach each side added to `toFront` and `toBack`.
+    std::function<void(std::size_t, std::size_t, std::size_t&, std::size_t&)> classify;
 #ifdef BSPC_SSE2
     // A float signed distance differs from partition's double one by less
     // than `error`: the corners' and the offset's rounding to float (half
@@ -731,53 +758,81 @@ class TreeBuilder {
       return _mm_and_ps(_mm_cmpge_ps(value, lowEdge), _mm_cmple_ps(value, highEdge));
     };
     const std::uint32_t* order = triangles.order.data();
-    for (; i + 4 <= columns.size; i += 4) {
-      const auto along = [&](int k) {
-        return _mm_sub_ps(
-            _mm_add_ps(_mm_add_ps(_mm_mul_ps(vx, _mm_loadu_ps(&columns.corner[k][0][i])),
-                                  _mm_mul_ps(vy, _mm_loadu_ps(&columns.corner[k][1][i]))),
-                       _mm_mul_ps(vz, _mm_loadu_ps(&columns.corner[k][2][i]))),
-            vd);
-      };
-      const __m128 s0 = along(0), s1 = along(1), s2 = along(2);
-      const __m128 lowest = _mm_min_ps(_mm_min_ps(s0, s1), s2);
-      const __m128 highest = _mm_max_ps(_mm_max_ps(s0, s1), s2);
-      const __m128 facing =
-          _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(&columns.normal[0][i]), vx),
-                                _mm_mul_ps(_mm_loadu_ps(&columns.normal[1][i]), vy)),
-                     _mm_mul_ps(_mm_loadu_ps(&columns.normal[2][i]), vz));
-      const __m128 inPlane = _mm_and_ps(_mm_cmple_ps(highest, above), _mm_cmpge_ps(lowest, below));
-      const __m128 unsure = _mm_or_ps(
-          _mm_or_ps(
-              _mm_or_ps(within(lowest, aboveLow, aboveHigh), within(lowest, belowLow, belowHigh)),
-              _mm_or_ps(within(highest, aboveLow, aboveHigh),
-                        within(highest, belowLow, belowHigh))),
-          _mm_and_ps(inPlane, _mm_cmple_ps(_mm_andnot_ps(signBit, facing), facingBand)));
-      const __m128 facesFront = _mm_cmpge_ps(facing, zero);
-      const __m128 reachesFront = _mm_or_ps(_mm_and_ps(inPlane, facesFront),
-                                            _mm_andnot_ps(inPlane, _mm_cmpgt_ps(highest, below)));
-      const __m128 reachesBack = _mm_or_ps(_mm_andnot_ps(facesFront, inPlane),
-                                           _mm_andnot_ps(inPlane, _mm_cmplt_ps(lowest, above)));
-      const int frontBits = _mm_movemask_ps(reachesFront), backBits = _mm_movemask_ps(reachesBack),
-                unsureBits = _mm_movemask_ps(unsure);
-      for (int lane = 0; lane < 4; ++lane) {
-        const std::uint32_t t = order[i + std::size_t(lane)];
-        const std::uint8_t sides = (unsureBits >> lane) & 1
-                                       ? classifyInDouble(t)
-                                       : std::uint8_t(((frontBits >> lane) & 1) * kFront |
-                                                      ((backBits >> lane) & 1) * kBack);
+    classify = [&](std::size_t first, std::size_t last, std::size_t& toFront, std::size_t& toBack) {
+      std::size_t i = first;
+      for (; i + 4 <= last; i += 4) {
+        const auto along = [&](int k) {
+          return _mm_sub_ps(
+              _mm_add_ps(_mm_add_ps(_mm_mul_ps(vx, _mm_loadu_ps(&columns.corner[k][0][i])),
+                                    _mm_mul_ps(vy, _mm_loadu_ps(&columns.corner[k][1][i]))),
+                         _mm_mul_ps(vz, _mm_loadu_ps(&columns.corner[k][2][i]))),
+              vd);
+        };
+        const __m128 s0 = along(0), s1 = along(1), s2 = along(2);
+        const __m128 lowest = _mm_min_ps(_mm_min_ps(s0, s1), s2);
+        const __m128 highest = _mm_max_ps(_mm_max_ps(s0, s1), s2);
+        const __m128 facing =
+            _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(&columns.normal[0][i]), vx),
+                                  _mm_mul_ps(_mm_loadu_ps(&columns.normal[1][i]), vy)),
+                       _mm_mul_ps(_mm_loadu_ps(&columns.normal[2][i]), vz));
+        const __m128 inPlane =
+            _mm_and_ps(_mm_cmple_ps(highest, above), _mm_cmpge_ps(lowest, below));
+        const __m128 unsure = _mm_or_ps(
+            _mm_or_ps(
+                _mm_or_ps(within(lowest, aboveLow, aboveHigh), within(lowest, belowLow, belowHigh)),
+                _mm_or_ps(within(highest, aboveLow, aboveHigh),
+                          within(highest, belowLow, belowHigh))),
+            _mm_and_ps(inPlane, _mm_cmple_ps(_mm_andnot_ps(signBit, facing), facingBand)));
+        const __m128 facesFront = _mm_cmpge_ps(facing, zero);
+        const __m128 reachesFront = _mm_or_ps(_mm_and_ps(inPlane, facesFront),
+                                              _mm_andnot_ps(inPlane, _mm_cmpgt_ps(highest, below)));
+        const __m128 reachesBack = _mm_or_ps(_mm_andnot_ps(facesFront, inPlane),
+                                             _mm_andnot_ps(inPlane, _mm_cmplt_ps(lowest, above)));
+        const int frontBits = _mm_movemask_ps(reachesFront),
+                  backBits = _mm_movemask_ps(reachesBack), unsureBits = _mm_movemask_ps(unsure);
+        for (int lane = 0; lane < 4; ++lane) {
+          const std::uint32_t t = order[i + std::size_t(lane)];
+          const std::uint8_t sides = (unsureBits >> lane) & 1
+                                         ? classifyInDouble(t)
+                                         : std::uint8_t(((frontBits >> lane) & 1) * kFront |
+                                                        ((backBits >> lane) & 1) * kBack);
+          side[t] = sides;
+          toFront += sides & kFront;
+          toBack += sides >> 1;
+        }
+      }
+      for (; i < last; ++i) {
+        const std::uint32_t t = order[i];
+        const std::uint8_t sides = classifyInDouble(t);
         side[t] = sides;
         toFront += sides & kFront;
         toBack += sides >> 1;
       }
-    }
+    };
+#else
+    classify = [&](std::size_t first, std::size_t last, std::size_t& toFront, std::size_t& toBack) {
+      for (std::size_t i = first; i < last; ++i) {
+        const std::uint32_t t = triangles.order[i];
+        const std::uint8_t sides = classifyInDouble(t);
+        side[t] = sides;
+        toFront += sides & kFront;
+        toBack += sides >> 1;
+      }
+    };
 #endif
-    for (; i < triangles.size(); ++i) {
-      const std::uint32_t t = triangles.order[i];
-      const std::uint8_t sides = classifyInDouble(t);
-      side[t] = sides;
-      toFront += sides & kFront;
-      toBack += sides >> 1;
+    const bool parallel = pool && triangles.size() > kParallelAbove;
+    std::size_t toFront = 0, toBack = 0;
+    if (parallel) {
+      const std::size_t ranges = (triangles.size() + kParallelRange - 1) / kParallelRange;
+      std::vector<std::pair<std::size_t, std::size_t>> reached(ranges);
+      runParallel(pool, ranges, 1, [&](int, std::size_t first, std::size_t last) {
+        for (std::size_t r = first; r < last; ++r)
+          classify(r * kParallelRange, std::min(triangles.size(), (r + 1) * kParallelRange),
+                   reached[r].first, reached[r].second);
+      });
+      for (const auto& [f, b] : reached) toFront += f, toBack += b;
+    } else {
+      classify(0, triangles.size(), toFront, toBack);
     }
     if (toFront == triangles.size() || toBack == triangles.size()) return false;
     // A side's list is written when wanted: a child that will be a leaf
@@ -812,13 +867,20 @@ class TreeBuilder {
       from.clear();
       from.shrink_to_fit();
     };
-    share(triangles.order, front.order, back.order, true, true);
     const auto splitFurther = [&](std::size_t count) {
       return count > settings_.maxLeafTriangles && childDepth < settings_.maxDepth;
     };
-    for (int axis = 0; axis < 3; ++axis)
-      share(triangles.byAxis[axis], front.byAxis[axis], back.byAxis[axis], splitFurther(toFront),
-            splitFurther(toBack));
+    // The four lists (the order, then each axis's) apart, one a task.
+    const auto shareList = [&](std::size_t list) {
+      if (list == 0)
+        share(triangles.order, front.order, back.order, true, true);
+      else
+        share(triangles.byAxis[list - 1], front.byAxis[list - 1], back.byAxis[list - 1],
+              splitFurther(toFront), splitFurther(toBack));
+    };
+    runParallel(parallel ? pool : nullptr, 4, 1, [&](int, std::size_t first, std::size_t last) {
+      for (std::size_t list = first; list < last; ++list) shareList(list);
+    });
     return true;
   }
 
@@ -976,7 +1038,7 @@ class TreeBuilder {
     const std::size_t n = lists.size();
     candidates(lists, scratch.candidates, scratch.slots);
     const Eigen::Vector3d middle = (cell.low + cell.high) / 2;
-    scratch.columns.gather(lists.order, mesh_, faceNormals_, middle);
+    scratch.columns.gather(lists.order, mesh_, faceNormals_, middle, pool);
     if (n > kSampledAbove && scratch.candidates.size() > kShortlist) {
       scratch.sample.resize(kSample);
       for (std::size_t i = 0; i < kSample; ++i) scratch.sample[i] = lists.order[i * n / kSample];
@@ -1071,8 +1133,8 @@ class TreeBuilder {
       return makeLeaf(triangles, depth, share, tree);
     const std::optional<Split> split = chooseSplit(triangles, cell, scratch, nullptr);
     Lists front, back;
-    if (!split ||
-        !partition(triangles, *split, scratch.columns, depth + 1, front, back, scratch.side))
+    if (!split || !partition(triangles, *split, scratch.columns, depth + 1, front, back,
+                             scratch.side, nullptr))
       return makeLeaf(triangles, depth, share, tree);
     const double whole = double(front.size() + back.size());
     const double frontShare = share * double(front.size()) / whole;

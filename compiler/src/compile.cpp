@@ -91,7 +91,8 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
   // Both rules turn about the same edges: found once, counted as edges.
   std::optional<SolidEdges> solidEdges;
   if (settings.dropCoveredFaces || settings.dropBuriedFaces)
-    timed(report.seconds.edges, report.cpuSeconds.edges, [&] { solidEdges.emplace(cleaned); });
+    timed(report.seconds.edges, report.cpuSeconds.edges,
+          [&] { solidEdges.emplace(cleaned, threads); });
   if (settings.dropCoveredFaces) {
     const std::vector<bool> covered = timed(report.seconds.edges, report.cpuSeconds.edges,
                                             [&] { return findCoveredFaces(*solidEdges); });
@@ -149,8 +150,8 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
       true, reached, limits);
   say(settings, kTreeLastPercent, "precompute planes");
   const auto planes = timed(report.seconds.planes, report.cpuSeconds.planes, [&] {
-    return computeTrianglePlanes(reached, meetablePlanes(classifyEdges(reached), report.edges),
-                                 threads);
+    return computeTrianglePlanes(
+        reached, meetablePlanes(classifyEdges(reached, threads), report.edges), threads);
   });
   say(settings, 95, "serialise");
   std::vector<std::uint8_t> blob = timed(report.seconds.write, report.cpuSeconds.write, [&] {

@@ -94,6 +94,20 @@ class EdgeMap {
   std::vector<std::array<std::pair<std::size_t, std::size_t>, 3>> group_;
 };
 
+// Calls `task(first, last)` on ranges covering [0, count): on `pool`'s
+// threads when there is one, else on this one. Each triangle's result lands
+// in its own slot, so the output is the same on any number of threads.
+// `task` must not throw (it only reads and fills sized arrays).
+template <class Task>
+void forRanges(bspf::ThreadPool* pool, std::size_t count, const Task& task) {
+  constexpr std::size_t kRange = 1024;
+  if (pool)
+    pool->parallelFor(count, kRange,
+                      [&](int, std::size_t first, std::size_t last) { task(first, last); });
+  else
+    task(0, count);
+}
+
 struct Geometry {
   const Mesh& mesh;
   std::vector<V3> normal;
@@ -101,16 +115,21 @@ struct Geometry {
   // the edge, pointing into it. Once each: turning about an edge needs it for
   // every face around.
   std::vector<std::array<V3, 3>> inward;
-  explicit Geometry(const Mesh& m) : mesh(m) {
-    normal.reserve(m.triangles.size());
-    for (const auto& t : m.triangles)
-      normal.push_back((m.vertices[t[1]] - m.vertices[t[0]])
-                           .cross(m.vertices[t[2]] - m.vertices[t[0]])
-                           .normalized());
+  Geometry(const Mesh& m, bspf::ThreadPool* pool) : mesh(m) {
+    normal.resize(m.triangles.size());
     inward.resize(m.triangles.size());
-    for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
-      for (int k = 0; k < 3; ++k)
-        inward[t][k] = normal[t].cross(corner(t, k + 1) - corner(t, k)).normalized();
+    forRanges(pool, m.triangles.size(), [&](std::size_t first, std::size_t last) {
+      for (std::size_t t = first; t < last; ++t) {
+        const auto& corners = m.triangles[t];
+        normal[t] = (m.vertices[corners[1]] - m.vertices[corners[0]])
+                        .cross(m.vertices[corners[2]] - m.vertices[corners[0]])
+                        .normalized();
+        for (int k = 0; k < 3; ++k)
+          inward[t][k] = normal[t]
+                             .cross(corner(std::uint32_t(t), k + 1) - corner(std::uint32_t(t), k))
+                             .normalized();
+      }
+    });
   }
   const V3& corner(std::uint32_t t, int k) const { return mesh.vertices[mesh.triangles[t][k % 3]]; }
   // The angle, in [0, 2 pi), from triangle t (turning through `side`, t's
@@ -157,10 +176,12 @@ Turn firstTurn(const Geometry& g, const EdgeMap& edges, std::uint32_t t, int k, 
 // Per triangle, edge k: the face first met turning about the edge from the
 // triangle's back (firstTurn through -normal), into its solid.
 using BackTurns = std::vector<std::array<Turn, 3>>;
-BackTurns backTurns(const Geometry& g, const EdgeMap& edges) {
+BackTurns backTurns(const Geometry& g, const EdgeMap& edges, bspf::ThreadPool* pool) {
   BackTurns back(g.mesh.triangles.size());
-  for (std::uint32_t t = 0; t < back.size(); ++t)
-    for (int k = 0; k < 3; ++k) back[t][k] = firstTurn(g, edges, t, k, -g.normal[t]);
+  forRanges(pool, back.size(), [&](std::size_t first, std::size_t last) {
+    for (auto t = std::uint32_t(first); t < last; ++t)
+      for (int k = 0; k < 3; ++k) back[t][k] = firstTurn(g, edges, t, k, -g.normal[t]);
+  });
   return back;
 }
 
@@ -418,11 +439,12 @@ struct SolidEdges::Parts {
   Geometry geometry;
   EdgeMap edges;
   BackTurns back;
-  explicit Parts(const Mesh& mesh)
-      : geometry(mesh), edges(mesh), back(backTurns(geometry, edges)) {}
+  Parts(const Mesh& mesh, bspf::ThreadPool* pool)
+      : geometry(mesh, pool), edges(mesh), back(backTurns(geometry, edges, pool)) {}
 };
 
-SolidEdges::SolidEdges(const Mesh& mesh) : parts_(std::make_unique<const Parts>(mesh)) {}
+SolidEdges::SolidEdges(const Mesh& mesh, bspf::ThreadPool* pool)
+    : parts_(std::make_unique<const Parts>(mesh, pool)) {}
 SolidEdges::~SolidEdges() = default;
 const Mesh& SolidEdges::mesh() const { return parts_->geometry.mesh; }
 
@@ -530,30 +552,32 @@ std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const SolidEdges& soli
   return out;
 }
 
-std::vector<TriangleEdges> classifyEdges(const Mesh& mesh) {
-  const Geometry g(mesh);
+std::vector<TriangleEdges> classifyEdges(const Mesh& mesh, bspf::ThreadPool* pool) {
+  const Geometry g(mesh, pool);
   const EdgeMap edges(mesh);
   std::vector<TriangleEdges> out(mesh.triangles.size());
-  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
-    for (int k = 0; k < 3; ++k) {
-      const Turn first = firstTurn(g, edges, t, k, g.normal[t]);
-      EdgeKind& kind = out[t].kind[k];
-      if (first.triangle == t)
-        kind = EdgeKind::Open;
-      else if (first.angle < std::numbers::pi - kAngleTolerance)
-        kind = g.consistent(t, k, first.triangle, first.k) ? EdgeKind::Concave : EdgeKind::Convex;
-      else if (first.angle <= std::numbers::pi + kAngleTolerance &&
-               g.normal[t].dot(g.normal[first.triangle]) > 0 &&
-               g.consistent(t, k, first.triangle, first.k))
-        kind = EdgeKind::Coplanar;
-      else
-        kind = EdgeKind::Convex;
-      if (kind == EdgeKind::Coplanar) {
-        const V3 mirror = g.corner(t, k) + g.corner(t, k + 1) - g.corner(t, k + 2);
-        out[t].mirrored[k] = (g.corner(first.triangle, first.k + 2) - mirror).norm() <= 1e-4;
+  forRanges(pool, out.size(), [&](std::size_t first, std::size_t last) {
+    for (auto t = std::uint32_t(first); t < last; ++t) {
+      for (int k = 0; k < 3; ++k) {
+        const Turn first = firstTurn(g, edges, t, k, g.normal[t]);
+        EdgeKind& kind = out[t].kind[k];
+        if (first.triangle == t)
+          kind = EdgeKind::Open;
+        else if (first.angle < std::numbers::pi - kAngleTolerance)
+          kind = g.consistent(t, k, first.triangle, first.k) ? EdgeKind::Concave : EdgeKind::Convex;
+        else if (first.angle <= std::numbers::pi + kAngleTolerance &&
+                 g.normal[t].dot(g.normal[first.triangle]) > 0 &&
+                 g.consistent(t, k, first.triangle, first.k))
+          kind = EdgeKind::Coplanar;
+        else
+          kind = EdgeKind::Convex;
+        if (kind == EdgeKind::Coplanar) {
+          const V3 mirror = g.corner(t, k) + g.corner(t, k + 1) - g.corner(t, k + 2);
+          out[t].mirrored[k] = (g.corner(first.triangle, first.k + 2) - mirror).norm() <= 1e-4;
+        }
       }
     }
-  }
+  });
   return out;
 }
 

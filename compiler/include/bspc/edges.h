@@ -6,6 +6,7 @@
 #pragma once
 
 #include <bspc/mesh.h>
+#include <bspf/thread_pool.h>
 
 #include <array>
 #include <cstdint>
@@ -51,10 +52,11 @@ Mesh dropCoveredFaces(const Mesh& mesh, EdgeReport& report);
 /// for each triangle edge the face first met turning about it from the
 /// triangle's back: what findCoveredFaces and solidNeighbours (so
 /// findBuriedFaces) both work from, found once for both. Refers to `mesh`,
-/// which must outlive it.
+/// which must outlive it. With a pool, the per-triangle work is shared
+/// between its threads (the same result on any number).
 class SolidEdges {
  public:
-  explicit SolidEdges(const Mesh& mesh);
+  explicit SolidEdges(const Mesh& mesh, bspf::ThreadPool* pool = nullptr);
   SolidEdges(const SolidEdges&) = delete;
   SolidEdges& operator=(const SolidEdges&) = delete;
   ~SolidEdges();
@@ -93,8 +95,10 @@ struct TriangleEdges {
   std::array<bool, 3> mirrored{};
 };
 
-/// Classifies every triangle's edges against the whole mesh.
-std::vector<TriangleEdges> classifyEdges(const Mesh& mesh);
+/// Classifies every triangle's edges against the whole mesh. With a pool,
+/// the triangles are shared between its threads (the same result on any
+/// number).
+std::vector<TriangleEdges> classifyEdges(const Mesh& mesh, bspf::ThreadPool* pool = nullptr);
 
 /// Bit k (0-2): edge plane k can be met; bit 3 + k: cap k can be met. The
 /// planes method treats a cleared plane as always holding. With
