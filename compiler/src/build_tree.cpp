@@ -558,7 +558,19 @@ class TreeBuilder {
         s.root = buildNode(s.lists, s.cell, s.depth, s.share, s.tree, scratch_[thread]);
       }
     });
+    // Sized once: grown append by append, the arrays were copied and their
+    // pages faulted in again at each doubling (putting oacmpctf3's 16
+    // subtrees together took 2.3 ms at 2 threads, its one subtree 0.8 ms).
+    std::size_t nodes = top_.size(), leaves = 0, entries = 0;
+    for (const Subtree& s : subtrees_) {
+      nodes += s.tree.nodes.size();
+      leaves += s.tree.leaves.size();
+      entries += s.tree.leafTriangles.size();
+    }
     BspTree tree;
+    tree.nodes.reserve(nodes);
+    tree.leaves.reserve(leaves);
+    tree.leafTriangles.reserve(entries);
     tree.root = assemble(top, tree);
     return tree;
   }
@@ -1036,6 +1048,8 @@ class TreeBuilder {
   std::optional<Split> chooseSplit(const Lists& lists, const Box& cell, Scratch& scratch,
                                    bspf::ThreadPool* pool) const {
     const std::size_t n = lists.size();
+    // A small node's counts take less time than waking the pool's threads.
+    if (n <= kParallelAbove) pool = nullptr;
     candidates(lists, scratch.candidates, scratch.slots);
     const Eigen::Vector3d middle = (cell.low + cell.high) / 2;
     scratch.columns.gather(lists.order, mesh_, faceNormals_, middle, pool);
