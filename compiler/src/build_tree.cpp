@@ -544,7 +544,7 @@ class TreeBuilder {
     scratch_.resize(std::size_t(threads));
     // One thread: the whole tree is one subtree.
     shareSize_ = threads == 1 ? all.size() : all.size() / (8 * std::size_t(threads));
-    const std::int32_t top = expand(all, bounds, 0, 1.0);
+    const std::int32_t top = expand(std::move(all), bounds);
 
     std::vector<std::size_t> order(subtrees_.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
@@ -630,28 +630,83 @@ class TreeBuilder {
     std::int32_t front = 0, back = 0;
   };
 
-  std::int32_t expand(Lists& triangles, const Box& cell, std::uint32_t depth, double share) {
-    std::optional<Split> split;
-    if (triangles.size() > shareSize_ && triangles.size() > settings_.maxLeafTriangles &&
-        depth < settings_.maxDepth)
-      split = chooseSplit(triangles, cell, scratch_.front(), pool_);
-    Lists front, back;
-    if (!split || !partition(triangles, *split, scratch_.front().columns, depth + 1, front, back,
-                             scratch_.front().side, pool_)) {
-      subtrees_.push_back({std::move(triangles), cell, depth, share, {}, -1});
-      return -static_cast<std::int32_t>(subtrees_.size());
+  // A node of the top waiting to be split or shared out, and where its
+  // reference goes: the front or back child of top node `parent` (-1: the
+  // root).
+  struct Pending {
+    Lists lists;
+    Box cell;
+    std::uint32_t depth;
+    double share;
+    std::int32_t parent;
+    bool front;
+  };
+
+  // Splits the top of the tree level by level, down to nodes of at most
+  // shareSize_ triangles (or that no split pays for), which become the
+  // subtrees; returns the root's reference. A level's nodes are split at
+  // once, one a thread, when none holds more than half of the level's
+  // triangles; otherwise one after another, each on all threads. Each node
+  // is split as it would be alone, so the tree is the same either way.
+  std::int32_t expand(Lists all, const Box& bounds) {
+    std::int32_t root = 0;
+    std::vector<Pending> level;
+    level.push_back({std::move(all), bounds, 0, 1.0, -1, false});
+    while (!level.empty()) {
+      const std::size_t count = level.size();
+      std::vector<std::optional<Split>> splits(count);
+      std::vector<Lists> fronts(count), backs(count);
+      std::vector<std::uint8_t> divided(count, 0);
+      const auto divide = [&](std::size_t i, Scratch& scratch, bspf::ThreadPool* pool) {
+        Pending& node = level[i];
+        if (node.lists.size() > shareSize_ && node.lists.size() > settings_.maxLeafTriangles &&
+            node.depth < settings_.maxDepth)
+          splits[i] = chooseSplit(node.lists, node.cell, scratch, pool);
+        divided[i] = splits[i] && partition(node.lists, *splits[i], scratch.columns, node.depth + 1,
+                                            fronts[i], backs[i], scratch.side, pool);
+      };
+      std::size_t total = 0, largest = 0;
+      for (const Pending& node : level) {
+        total += node.lists.size();
+        largest = std::max(largest, node.lists.size());
+      }
+      if (count > 1 && 2 * largest <= total)
+        runParallel(pool_, count, 1, [&](int thread, std::size_t first, std::size_t last) {
+          for (std::size_t i = first; i < last; ++i)
+            divide(i, scratch_[std::size_t(thread)], nullptr);
+        });
+      else
+        for (std::size_t i = 0; i < count; ++i) divide(i, scratch_.front(), pool_);
+
+      std::vector<Pending> next;
+      for (std::size_t i = 0; i < count; ++i) {
+        Pending& node = level[i];
+        std::int32_t reference;
+        if (!divided[i]) {
+          subtrees_.push_back({std::move(node.lists), node.cell, node.depth, node.share, {}, -1});
+          reference = -static_cast<std::int32_t>(subtrees_.size());
+        } else {
+          reference = static_cast<std::int32_t>(top_.size());
+          top_.push_back({*splits[i]});
+          const double whole = double(fronts[i].size() + backs[i].size());
+          const double frontShare = node.share * double(fronts[i].size()) / whole;
+          const double backShare = node.share * double(backs[i].size()) / whole;
+          const auto [frontCell, backCell] = node.cell.clippedBoth(*splits[i]);
+          next.push_back(
+              {std::move(fronts[i]), frontCell, node.depth + 1, frontShare, reference, true});
+          next.push_back(
+              {std::move(backs[i]), backCell, node.depth + 1, backShare, reference, false});
+        }
+        if (node.parent < 0)
+          root = reference;
+        else if (node.front)
+          top_[std::size_t(node.parent)].front = reference;
+        else
+          top_[std::size_t(node.parent)].back = reference;
+      }
+      level = std::move(next);
     }
-    const auto index = static_cast<std::int32_t>(top_.size());
-    top_.push_back({*split});
-    const double whole = double(front.size() + back.size());
-    const double backShare = share * double(back.size()) / whole;
-    const auto [frontCell, backCell] = cell.clippedBoth(*split);
-    const std::int32_t frontChild =
-        expand(front, frontCell, depth + 1, share * double(front.size()) / whole);
-    const std::int32_t backChild = expand(back, backCell, depth + 1, backShare);
-    top_[std::size_t(index)].front = frontChild;
-    top_[std::size_t(index)].back = backChild;
-    return index;
+    return root;
   }
 
   // The top node or subtree `child` and everything below it, appended to
