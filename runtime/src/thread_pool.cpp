@@ -66,15 +66,23 @@ void ThreadPool::workerLoop(int thread) {
              generation_.load(std::memory_order_relaxed) != seen;
     });
     {
-      // The job's fields were written under the mutex: taking it makes them
-      // visible, whether the spin or the condition variable saw the change.
       std::unique_lock lock(mutex_);
       wake_.wait(lock, [&] { return stopping_ || generation_ != seen; });
       if (stopping_) return;
       seen = generation_;
     }
+    // Joined only while the job is open: a closed one's caller may already
+    // have returned, and its task be gone. (The job joined may be a later
+    // one than `seen`: its fields were written before it opened, and the
+    // acquire here sees them.)
+    unsigned state = joined_.load(std::memory_order_relaxed);
+    do {
+      if (state & kClosed) break;
+    } while (!joined_.compare_exchange_weak(state, state + 1, std::memory_order_acquire,
+                                            std::memory_order_relaxed));
+    if (state & kClosed) continue;
     runRanges(thread);
-    if (busy_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
+    if (joined_.fetch_sub(1, std::memory_order_acq_rel) == (kClosed | 1)) {
       std::lock_guard lock(mutex_);
       done_.notify_one();
     }
@@ -95,16 +103,17 @@ void ThreadPool::parallelFor(std::size_t count, std::size_t chunk, const RangeTa
     count_ = count;
     chunk_ = chunk;
     nextRange_ = 0;
-    busy_ = int(workers_.size());
+    joined_.store(0, std::memory_order_release);  // open, after the fields
     ++generation_;
   }
   wake_.notify_all();
   runRanges(0);
-  // Every worker leaves the job before the task goes out of scope, even one
-  // that woke too late to find a range left.
-  if (!spinUntil([&] { return busy_.load(std::memory_order_acquire) == 0; })) {
+  // Every range is taken: closed, no worker joins any more; those that did
+  // leave before the task goes out of scope.
+  const auto left = [&] { return joined_.load(std::memory_order_acquire) == kClosed; };
+  if (joined_.fetch_or(kClosed, std::memory_order_acq_rel) != 0 && !spinUntil(left)) {
     std::unique_lock lock(mutex_);
-    done_.wait(lock, [&] { return busy_ == 0; });
+    done_.wait(lock, left);
   }
   std::lock_guard lock(mutex_);
   task_ = nullptr;

@@ -66,3 +66,32 @@ TEST_CASE("a thread pool covers every item when its workers have gone to sleep b
     for (std::size_t i = 0; i < count; ++i) REQUIRE(visits[i] == 1);
   }
 }
+
+TEST_CASE("a thread pool's task may be destroyed as soon as parallelFor returns",
+          "[runtime][threads]") {
+  // The caller runs out of ranges and returns without waiting for a worker
+  // still waking up, but must wait for every worker running a range: each
+  // range here takes tens of microseconds, so returning early leaves an
+  // item unvisited, and the task (on the heap, freed at once) used after
+  // free for the sanitizer builds to report. The pauses let workers fall
+  // asleep between jobs, so some wake too late for any range.
+  const int threads = GENERATE(2, 4);
+  INFO(threads << " threads");
+  bspf::ThreadPool pool(threads);
+  for (int call = 0; call < 300; ++call) {
+    if (call % 3 == 0) std::this_thread::sleep_for(std::chrono::microseconds(100 + call % 4 * 100));
+    const std::size_t count = std::size_t(call % (2 * threads + 1));
+    const auto visits = std::make_unique<std::atomic<int>[]>(count + 1);
+    auto task = std::make_unique<bspf::ThreadPool::RangeTask>(
+        [&visits](int, std::size_t first, std::size_t last) {
+          const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(20);
+          while (std::chrono::steady_clock::now() < until) {
+          }
+          for (std::size_t i = first; i < last; ++i) ++visits[i];
+        });
+    pool.parallelFor(count, 1, *task);
+    task.reset();
+    INFO("call " << call);
+    for (std::size_t i = 0; i < count; ++i) REQUIRE(visits[i] == 1);
+  }
+}

@@ -56,15 +56,20 @@ class ThreadPool {
   std::condition_variable wake_, done_;
   // The current job: task_, count_ and chunk_ are written under mutex_
   // before generation_ changes, which tells workers a new one started.
-  // Workers and the caller spin a little on generation_ and busy_ before
+  // Workers and the caller spin a little on generation_ and joined_ before
   // sleeping on the condition variables (a frame's phases follow each other
   // within microseconds, and a sleeping thread takes tens of them to wake),
-  // and take ranges with an atomic counter.
+  // and take ranges with an atomic counter. A worker joins a job before it
+  // reads the job's fields; once the caller has run out of ranges it closes
+  // the job, waits only for the workers that joined, and a worker that wakes
+  // later finds it closed: the caller never waits for a late wake-up.
   const RangeTask* task_ = nullptr;
   std::size_t count_ = 0, chunk_ = 1;
   std::atomic<std::size_t> nextRange_{0};
   std::atomic<unsigned long long> generation_{0};
-  std::atomic<int> busy_{0};  ///< workers still inside the current job
+  /// The workers inside the current job, plus kClosed once it is closed.
+  std::atomic<unsigned> joined_{kClosed};
+  static constexpr unsigned kClosed = 1u << 31;
   std::atomic<bool> stopping_{false};
 };
 
