@@ -95,7 +95,7 @@ std::vector<std::uint8_t> compileCleanStages(const Mesh& mesh, const CompileSett
           [&] { solidEdges.emplace(cleaned, threads); });
   if (settings.dropCoveredFaces) {
     const std::vector<bool> covered = timed(report.seconds.edges, report.cpuSeconds.edges,
-                                            [&] { return findCoveredFaces(*solidEdges); });
+                                            [&] { return findCoveredFaces(*solidEdges, threads); });
     for (std::size_t t = 0; t < keep.size(); ++t) {
       keep[t] = !covered[t];
       report.edges.droppedCovered += covered[t];

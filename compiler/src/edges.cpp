@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <memory>
+#include <mutex>
 #include <numbers>
 #include <numeric>
 #include <span>
@@ -106,6 +108,29 @@ void forRanges(bspf::ThreadPool* pool, std::size_t count, const Task& task) {
                       [&](int, std::size_t first, std::size_t last) { task(first, last); });
   else
     task(0, count);
+}
+
+// forRanges for a task that may throw (it allocates) and keeps working
+// memory per thread: `task(thread, first, last)`, `thread` below the pool's
+// thread count (0 without a pool). The first exception is thrown here.
+template <class Task>
+void forThreadRanges(bspf::ThreadPool* pool, std::size_t count, const Task& task) {
+  constexpr std::size_t kRange = 256;
+  if (!pool) {
+    task(0, 0, count);
+    return;
+  }
+  std::mutex mutex;
+  std::exception_ptr failure;
+  pool->parallelFor(count, kRange, [&](int thread, std::size_t first, std::size_t last) {
+    try {
+      task(thread, first, last);
+    } catch (...) {
+      std::lock_guard lock(mutex);
+      if (!failure) failure = std::current_exception();
+    }
+  });
+  if (failure) std::rethrow_exception(failure);
 }
 
 struct Geometry {
@@ -288,29 +313,15 @@ class PlaneBuckets {
     }
   }
 
+  // One thread's memory of the normal buckets it asked about: per bucket,
+  // the runs of the buckets around it (the look-ups made once).
+  class Around;
+
   // Calls visit(entry) for every entry whose bucket is within one step of
-  // `home` in each of its four numbers, in no particular order.
+  // `home` in each of its four numbers, in no particular order. `around`:
+  // the calling thread's own.
   template <typename Visit>
-  void forNeighbours(const PlaneKey& home, Visit&& visit) {
-    const auto [known, added] = around_.tryEmplace(normalOf(home), {});
-    if (added) {
-      const auto first = static_cast<std::uint32_t>(aroundRuns_.size());
-      for (std::int64_t dx = -1; dx <= 1; ++dx)
-        for (std::int64_t dy = -1; dy <= 1; ++dy)
-          for (std::int64_t dz = -1; dz <= 1; ++dz)
-            if (const Run* run = runs_.find({home.nx + dx, home.ny + dy, home.nz + dz}))
-              aroundRuns_.push_back(*run);
-      *known = {first, static_cast<std::uint32_t>(aroundRuns_.size())};
-    }
-    const auto nearerThan = [](const Entry& entry, std::int64_t d) { return entry.key.d < d; };
-    for (std::uint32_t r = known->first; r < known->second; ++r) {
-      const auto first = entries_.begin() + aroundRuns_[r].first,
-                 last = entries_.begin() + aroundRuns_[r].second;
-      for (auto it = std::lower_bound(first, last, home.d - 1, nearerThan);
-           it != last && it->key.d <= home.d + 1; ++it)
-        visit(*it);
-    }
-  }
+  void forNeighbours(const PlaneKey& home, Around& around, Visit&& visit) const;
 
  private:
   struct NormalKey {
@@ -330,14 +341,39 @@ class PlaneBuckets {
     return a.nx == b.nx && a.ny == b.ny && a.nz == b.nz;
   }
 
-  // A range of entries_ (one normal bucket's), or of aroundRuns_.
+  // A range of entries_ (one normal bucket's), or of Around's runs.
   using Run = std::pair<std::uint32_t, std::uint32_t>;
   std::vector<Entry> entries_;
   FlatMap<NormalKey, Run, NormalKeyHash> runs_;
-  // Per normal bucket asked about: the runs of the buckets around it.
-  FlatMap<NormalKey, Run, NormalKeyHash> around_;
-  std::vector<Run> aroundRuns_;
 };
+
+class PlaneBuckets::Around {
+  friend class PlaneBuckets;
+  FlatMap<NormalKey, Run, NormalKeyHash> known_;
+  std::vector<Run> runs_;
+};
+
+template <typename Visit>
+void PlaneBuckets::forNeighbours(const PlaneKey& home, Around& around, Visit&& visit) const {
+  const auto [known, added] = around.known_.tryEmplace(normalOf(home), {});
+  if (added) {
+    const auto first = static_cast<std::uint32_t>(around.runs_.size());
+    for (std::int64_t dx = -1; dx <= 1; ++dx)
+      for (std::int64_t dy = -1; dy <= 1; ++dy)
+        for (std::int64_t dz = -1; dz <= 1; ++dz)
+          if (const Run* run = runs_.find({home.nx + dx, home.ny + dy, home.nz + dz}))
+            around.runs_.push_back(*run);
+    *known = {first, static_cast<std::uint32_t>(around.runs_.size())};
+  }
+  const auto nearerThan = [](const Entry& entry, std::int64_t d) { return entry.key.d < d; };
+  for (std::uint32_t r = known->first; r < known->second; ++r) {
+    const auto first = entries_.begin() + around.runs_[r].first,
+               last = entries_.begin() + around.runs_[r].second;
+    for (auto it = std::lower_bound(first, last, home.d - 1, nearerThan);
+         it != last && it->key.d <= home.d + 1; ++it)
+      visit(*it);
+  }
+}
 
 using Polygon = std::vector<V2>;
 
@@ -450,7 +486,7 @@ const Mesh& SolidEdges::mesh() const { return parts_->geometry.mesh; }
 
 std::vector<bool> findCoveredFaces(const Mesh& mesh) { return findCoveredFaces(SolidEdges(mesh)); }
 
-std::vector<bool> findCoveredFaces(const SolidEdges& solid) {
+std::vector<bool> findCoveredFaces(const SolidEdges& solid, bspf::ThreadPool* pool) {
   const Geometry& g = solid.parts().geometry;
   const Mesh& mesh = g.mesh;
   const std::vector<bool> backed = solidBehind(g, solid.parts().edges, solid.parts().back);
@@ -468,39 +504,48 @@ std::vector<bool> findCoveredFaces(const SolidEdges& solid) {
           {planeKey(g.normal[t], g.normal[t].dot(g.corner(t, 0))), t, bounds(t)});
   PlaneBuckets planes(std::move(backedEntries));
 
-  std::vector<bool> drop(n, false);
-  std::vector<std::uint32_t> cover;
-  ClipScratch scratch;
-  for (std::uint32_t f = 0; f < n; ++f) {
-    const V3 opposite = -g.normal[f];
-    const double d = opposite.dot(g.corner(f, 0));
-    const PlaneKey home = planeKey(opposite, d);
-    Eigen::AlignedBox3d box = bounds(f);
-    double scale = 1;
-    for (int k = 0; k < 3; ++k) scale = std::max(scale, g.corner(f, k).cwiseAbs().maxCoeff());
-    const double tolerance = 1e-4 + 1e-6 * scale;
-    box.min().array() -= tolerance, box.max().array() += tolerance;
-    cover.clear();
-    planes.forNeighbours(home, [&](const PlaneBuckets::Entry& entry) {
-      const std::uint32_t c = entry.triangle;
-      if (c == f || g.normal[c].dot(opposite) < 1 - 2e-7) return;
-      if (!box.intersects(entry.box)) return;
-      bool inPlane = true;
-      for (int k = 0; k < 3; ++k)
-        inPlane = inPlane &&
-                  std::abs(g.normal[c].dot(g.corner(f, k) - g.corner(c, 0))) <= tolerance &&
-                  std::abs(g.normal[f].dot(g.corner(c, k) - g.corner(f, 0))) <= tolerance;
-      if (inPlane) cover.push_back(c);
-    });
-    // Many overlapping faces in one plane (hostile input): keep the face
-    // rather than clip it against them all.
-    constexpr std::size_t kMaxCover = 64;
-    if (cover.empty() || cover.size() > kMaxCover) continue;
-    std::sort(cover.begin(), cover.end());
-    drop[f] = covered(g, f, cover, scratch);
-  }
-
-  return drop;
+  // Each face decided alone, into its own byte: the same on any number of
+  // threads, each with its own look-ups and clipping memory.
+  struct Working {
+    PlaneBuckets::Around around;
+    std::vector<std::uint32_t> cover;
+    ClipScratch scratch;
+  };
+  std::vector<Working> working(pool ? std::size_t(pool->threadCount()) : 1);
+  std::vector<std::uint8_t> dropped(n, 0);
+  const auto decide = [&](int thread, std::size_t first, std::size_t last) {
+    auto& [around, cover, scratch] = working[std::size_t(thread)];
+    for (auto f = std::uint32_t(first); f < last; ++f) {
+      const V3 opposite = -g.normal[f];
+      const double d = opposite.dot(g.corner(f, 0));
+      const PlaneKey home = planeKey(opposite, d);
+      Eigen::AlignedBox3d box = bounds(f);
+      double scale = 1;
+      for (int k = 0; k < 3; ++k) scale = std::max(scale, g.corner(f, k).cwiseAbs().maxCoeff());
+      const double tolerance = 1e-4 + 1e-6 * scale;
+      box.min().array() -= tolerance, box.max().array() += tolerance;
+      cover.clear();
+      planes.forNeighbours(home, around, [&](const PlaneBuckets::Entry& entry) {
+        const std::uint32_t c = entry.triangle;
+        if (c == f || g.normal[c].dot(opposite) < 1 - 2e-7) return;
+        if (!box.intersects(entry.box)) return;
+        bool inPlane = true;
+        for (int k = 0; k < 3; ++k)
+          inPlane = inPlane &&
+                    std::abs(g.normal[c].dot(g.corner(f, k) - g.corner(c, 0))) <= tolerance &&
+                    std::abs(g.normal[f].dot(g.corner(c, k) - g.corner(f, 0))) <= tolerance;
+        if (inPlane) cover.push_back(c);
+      });
+      // Many overlapping faces in one plane (hostile input): keep the face
+      // rather than clip it against them all.
+      constexpr std::size_t kMaxCover = 64;
+      if (cover.empty() || cover.size() > kMaxCover) continue;
+      std::sort(cover.begin(), cover.end());
+      dropped[f] = covered(g, f, cover, scratch);
+    }
+  };
+  forThreadRanges(pool, n, decide);
+  return std::vector<bool>(dropped.begin(), dropped.end());
 }
 
 Mesh dropCoveredFaces(const Mesh& mesh, EdgeReport& report) {

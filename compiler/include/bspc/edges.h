@@ -71,8 +71,10 @@ class SolidEdges {
 
 /// Per triangle: whether dropCoveredFaces drops it.
 std::vector<bool> findCoveredFaces(const Mesh& mesh);
-/// The same, from `edges` of the mesh (shared with solidNeighbours).
-std::vector<bool> findCoveredFaces(const SolidEdges& edges);
+/// The same, from `edges` of the mesh (shared with solidNeighbours). With a
+/// pool, the faces are shared between its threads (the same result on any
+/// number).
+std::vector<bool> findCoveredFaces(const SolidEdges& edges, bspf::ThreadPool* pool = nullptr);
 
 /// Per triangle, edge k (corner k to corner k + 1): the triangle across it
 /// that closes the same solid, or ~0u. Across an edge of two triangles, the
