@@ -58,38 +58,56 @@ struct Box {
     static constexpr int kEdges[12][3] = {{0, 1, 0}, {2, 3, 0}, {4, 5, 0}, {6, 7, 0},
                                           {0, 2, 1}, {1, 3, 1}, {4, 6, 1}, {5, 7, 1},
                                           {0, 4, 2}, {1, 5, 2}, {2, 6, 2}, {3, 7, 2}};
+    // Both sides in one pass. A corner at distance 0 belongs to both. An
+    // edge crossing the plane with a corner on each side (the usual case)
+    // crosses it at the same point for both: the back's -a / (-a - -b) is
+    // a / (a - b) to the bit, as IEEE negation and subtraction are exact
+    // mirror images. An edge with a corner at distance 0 crosses for one
+    // side only, which takes its own side's arithmetic (its sign of zero).
+    double lo[2][3], hi[2][3];
+    for (int keep = 0; keep < 2; ++keep)
+      for (int axis = 0; axis < 3; ++axis) {
+        lo[keep][axis] = std::numeric_limits<double>::infinity();
+        hi[keep][axis] = -std::numeric_limits<double>::infinity();
+      }
+    const auto add = [&](int keep, const double* at) {
+      for (int axis = 0; axis < 3; ++axis) {
+        lo[keep][axis] = std::min(lo[keep][axis], at[axis]);
+        hi[keep][axis] = std::max(hi[keep][axis], at[axis]);
+      }
+    };
+    for (int i = 0; i < 8; ++i) {
+      if (along[i] >= 0) add(0, corners[i]);
+      if (along[i] <= 0) add(1, corners[i]);
+    }
+    // A crossing moves only along its edge's axis, and its other
+    // coordinates are those of its edge's corner on that side, already
+    // added: only the axis's bounds can change.
+    const auto addCrossing = [&](int keep, int axis, double at) {
+      lo[keep][axis] = std::min(lo[keep][axis], at);
+      hi[keep][axis] = std::max(hi[keep][axis], at);
+    };
+    for (const auto& [i, j, axis] : kEdges) {
+      const bool frontCrosses = (along[i] >= 0) != (along[j] >= 0);
+      const bool backCrosses = (along[i] <= 0) != (along[j] <= 0);
+      if (!frontCrosses && !backCrosses) continue;
+      const double from = corners[i][axis], span = corners[j][axis] - corners[i][axis];
+      if (frontCrosses && backCrosses) {
+        const double at = from + along[i] / (along[i] - along[j]) * span;
+        addCrossing(0, axis, at);
+        addCrossing(1, axis, at);
+      } else if (frontCrosses) {
+        addCrossing(0, axis, from + along[i] / (along[i] - along[j]) * span);
+      } else {
+        const double sideI = -along[i], sideJ = -along[j];
+        addCrossing(1, axis, from + sideI / (sideI - sideJ) * span);
+      }
+    }
     Box boxes[2];
     for (int keep = 0; keep < 2; ++keep) {
-      const double sign = keep == 0 ? 1.0 : -1.0;
-      double lo[3], hi[3];
-      for (int axis = 0; axis < 3; ++axis) {
-        lo[axis] = std::numeric_limits<double>::infinity();
-        hi[axis] = -std::numeric_limits<double>::infinity();
-      }
-      const auto add = [&](double x, double y, double z) {
-        lo[0] = std::min(lo[0], x);
-        lo[1] = std::min(lo[1], y);
-        lo[2] = std::min(lo[2], z);
-        hi[0] = std::max(hi[0], x);
-        hi[1] = std::max(hi[1], y);
-        hi[2] = std::max(hi[2], z);
-      };
-      double side[8];
-      for (int i = 0; i < 8; ++i) {
-        side[i] = sign * along[i];
-        if (side[i] >= 0) add(corners[i][0], corners[i][1], corners[i][2]);
-      }
-      // A crossing moves only along its edge's axis: its other coordinates
-      // are the corner's (the interpolation adds t * 0 to them).
-      for (const auto& [i, j, axis] : kEdges) {
-        if ((side[i] >= 0) == (side[j] >= 0)) continue;
-        const double t = side[i] / (side[i] - side[j]);
-        double at[3] = {corners[i][0], corners[i][1], corners[i][2]};
-        at[axis] = corners[i][axis] + t * (corners[j][axis] - corners[i][axis]);
-        add(at[0], at[1], at[2]);
-      }
-      if (lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2])
-        boxes[keep] = {Eigen::Vector3d(lo[0], lo[1], lo[2]), Eigen::Vector3d(hi[0], hi[1], hi[2])};
+      if (lo[keep][0] <= hi[keep][0] && lo[keep][1] <= hi[keep][1] && lo[keep][2] <= hi[keep][2])
+        boxes[keep] = {Eigen::Vector3d(lo[keep][0], lo[keep][1], lo[keep][2]),
+                       Eigen::Vector3d(hi[keep][0], hi[keep][1], hi[keep][2])};
       else
         boxes[keep] = {low, low};  // nothing on that side
     }
@@ -654,7 +672,7 @@ class TreeBuilder {
     level.push_back({std::move(all), bounds, 0, 1.0, -1, false});
     while (!level.empty()) {
       const std::size_t count = level.size();
-      std::vector<std::optional<Split>> splits(count);
+      std::vector<std::optional<Chosen>> splits(count);
       std::vector<Lists> fronts(count), backs(count);
       std::vector<std::uint8_t> divided(count, 0);
       const auto divide = [&](std::size_t i, Scratch& scratch, bspf::ThreadPool* pool) {
@@ -662,8 +680,9 @@ class TreeBuilder {
         if (node.lists.size() > shareSize_ && node.lists.size() > settings_.maxLeafTriangles &&
             node.depth < settings_.maxDepth)
           splits[i] = chooseSplit(node.lists, node.cell, scratch, pool);
-        divided[i] = splits[i] && partition(node.lists, *splits[i], scratch.columns, node.depth + 1,
-                                            fronts[i], backs[i], scratch.side, pool);
+        divided[i] =
+            splits[i] && partition(node.lists, splits[i]->split, scratch.columns, node.depth + 1,
+                                   fronts[i], backs[i], scratch.side, pool);
       };
       std::size_t total = 0, largest = 0;
       for (const Pending& node : level) {
@@ -687,11 +706,11 @@ class TreeBuilder {
           reference = -static_cast<std::int32_t>(subtrees_.size());
         } else {
           reference = static_cast<std::int32_t>(top_.size());
-          top_.push_back({*splits[i]});
+          top_.push_back({splits[i]->split});
           const double whole = double(fronts[i].size() + backs[i].size());
           const double frontShare = node.share * double(fronts[i].size()) / whole;
           const double backShare = node.share * double(backs[i].size()) / whole;
-          const auto [frontCell, backCell] = node.cell.clippedBoth(*splits[i]);
+          const auto& [frontCell, backCell] = splits[i]->cells;
           next.push_back(
               {std::move(fronts[i]), frontCell, node.depth + 1, frontShare, reference, true});
           next.push_back(
@@ -1028,6 +1047,13 @@ class TreeBuilder {
     }
   }
 
+  // The split chooseSplit picks, with the boxes around its two cells (front,
+  // back), which select clipped to judge it.
+  struct Chosen {
+    Split split;
+    std::pair<Box, Box> cells;
+  };
+
   // Per-thread working memory of the split search.
   struct Scratch {
     Columns columns, sampleColumns;
@@ -1100,8 +1126,8 @@ class TreeBuilder {
   // almost always (the trees' query figures: docs/measurements.md). When
   // no shortlisted candidate pays, all are counted. With a pool, the exact
   // counts run on all its threads.
-  std::optional<Split> chooseSplit(const Lists& lists, const Box& cell, Scratch& scratch,
-                                   bspf::ThreadPool* pool) const {
+  std::optional<Chosen> chooseSplit(const Lists& lists, const Box& cell, Scratch& scratch,
+                                    bspf::ThreadPool* pool) const {
     const std::size_t n = lists.size();
     // A small node's counts take less time than waking the pool's threads.
     if (n <= kParallelAbove) pool = nullptr;
@@ -1125,7 +1151,7 @@ class TreeBuilder {
       for (std::size_t i = 0; i < kShortlist; ++i)
         scratch.shortlist.push_back(scratch.candidates[scratch.estimates[i].second]);
       countAll(scratch.shortlist, scratch.columns, scratch, pool, scratch.counts);
-      if (std::optional<Split> chosen = select(scratch.shortlist, n, cell, scratch)) return chosen;
+      if (std::optional<Chosen> chosen = select(scratch.shortlist, n, cell, scratch)) return chosen;
     }
     countAll(scratch.candidates, scratch.columns, scratch, pool, scratch.counts);
     return select(scratch.candidates, n, cell, scratch);
@@ -1133,8 +1159,8 @@ class TreeBuilder {
 
   // The choice among `candidates`, whose counts over the node's `n`
   // triangles are in scratch.counts.
-  std::optional<Split> select(const std::vector<Candidate>& candidates, std::size_t n,
-                              const Box& cell, Scratch& scratch) const {
+  std::optional<Chosen> select(const std::vector<Candidate>& candidates, std::size_t n,
+                               const Box& cell, Scratch& scratch) const {
     scratch.counted.clear();
     const double count = static_cast<double>(n);
     for (std::size_t i = 0; i < candidates.size(); ++i) {
@@ -1152,7 +1178,7 @@ class TreeBuilder {
     for (std::size_t i = 0; i < scratch.counted.size(); ++i)
       scratch.ranked.push_back({scratch.counted[i].score, i});
     std::sort(scratch.ranked.begin(), scratch.ranked.end());
-    auto best = [&](double reach) -> std::optional<Split> {
+    auto best = [&](double reach) -> std::optional<Chosen> {
       const double whole = cell.reachVolume(reach);
       for (const auto& [score, i] : scratch.ranked) {
         auto& c = scratch.counted[i];
@@ -1160,11 +1186,11 @@ class TreeBuilder {
         const double cost = 1.0 + (c.cells->first.reachVolume(reach) * c.frontTotal +
                                    c.cells->second.reachVolume(reach) * c.backTotal) /
                                       whole;
-        if (cost < count) return c.split;
+        if (cost < count) return Chosen{c.split, *c.cells};
       }
       return std::nullopt;
     };
-    std::optional<Split> chosen = best(settings_.queryReach);
+    std::optional<Chosen> chosen = best(settings_.queryReach);
     if (!chosen && n > kDenseNodeTriangles)
       chosen = best(std::min(settings_.queryReach, 0.25 * (cell.high - cell.low).maxCoeff()));
     return chosen;
@@ -1200,10 +1226,10 @@ class TreeBuilder {
                          BspTree& tree, Scratch& scratch) {
     if (triangles.size() <= settings_.maxLeafTriangles || depth >= settings_.maxDepth)
       return makeLeaf(triangles, depth, share, tree);
-    const std::optional<Split> split = chooseSplit(triangles, cell, scratch, nullptr);
+    const std::optional<Chosen> chosen = chooseSplit(triangles, cell, scratch, nullptr);
     Lists front, back;
-    if (!split || !partition(triangles, *split, scratch.columns, depth + 1, front, back,
-                             scratch.side, nullptr))
+    if (!chosen || !partition(triangles, chosen->split, scratch.columns, depth + 1, front, back,
+                              scratch.side, nullptr))
       return makeLeaf(triangles, depth, share, tree);
     const double whole = double(front.size() + back.size());
     const double frontShare = share * double(front.size()) / whole;
@@ -1211,11 +1237,12 @@ class TreeBuilder {
 
     const auto index = static_cast<std::int32_t>(tree.nodes.size());
     tree.nodes.emplace_back();
-    const auto [frontCell, backCell] = cell.clippedBoth(*split);
+    const auto& [frontCell, backCell] = chosen->cells;
     const std::int32_t frontChild =
         buildNode(front, frontCell, depth + 1, frontShare, tree, scratch);
     const std::int32_t backChild = buildNode(back, backCell, depth + 1, backShare, tree, scratch);
-    tree.nodes[std::size_t(index)] = bspf::schema::Node(toPlane(*split), frontChild, backChild);
+    tree.nodes[std::size_t(index)] =
+        bspf::schema::Node(toPlane(chosen->split), frontChild, backChild);
     return index;
   }
 
