@@ -370,30 +370,62 @@ struct Counts {
 // Counts::add on four triangles at once: the same decisions, lane by lane.
 struct TallySse2 {
   __m128 above, below, zero = _mm_setzero_ps();
-  __m128i front = _mm_setzero_si128(), back = _mm_setzero_si128();
+  // Minus the lanes reaching the front (16-bit lanes 0 to 3) and the back
+  // (4 to 7): one accumulator, one addition a four. 16 bits hold the count
+  // of a block (TreeBuilder::kBlock, a few hundred triangles), the most
+  // that one tally is given.
+  __m128i negatedReached = _mm_setzero_si128();
   explicit TallySse2(float tolerance)
       : above(_mm_set1_ps(tolerance)), below(_mm_set1_ps(-tolerance)) {}
+  // A four's lanes that reach each side, as masks.
+  struct Reach {
+    __m128 inPlane, front, back;
+  };
   // `facing()` gives the lanes' facings; it is called only when a lane
   // lies in the plane, which few do (for most four, the side follows from
   // the distances alone).
   template <class Facing>
   void add(__m128 lowest, __m128 highest, const Facing& facing) {
-    const __m128 inPlane = _mm_and_ps(_mm_cmple_ps(highest, above), _mm_cmpge_ps(lowest, below));
-    __m128 reachesFront = _mm_cmpgt_ps(highest, below);
-    __m128 reachesBack = _mm_cmplt_ps(lowest, above);
-    if (_mm_movemask_ps(inPlane)) {
-      const __m128 facesFront = _mm_cmpge_ps(facing(), zero);
-      reachesFront =
-          _mm_or_ps(_mm_and_ps(inPlane, facesFront), _mm_andnot_ps(inPlane, reachesFront));
-      reachesBack =
-          _mm_or_ps(_mm_andnot_ps(facesFront, inPlane), _mm_andnot_ps(inPlane, reachesBack));
-    }
-    // A mask lane is all ones, -1 as an integer: subtracting counts it.
-    // `front` and `back` count all that reach the side; counts() finds
-    // those reaching both from them.
-    front = _mm_sub_epi32(front, _mm_castps_si128(reachesFront));
-    back = _mm_sub_epi32(back, _mm_castps_si128(reachesBack));
+    Reach reach = byDistance(lowest, highest);
+    if (_mm_movemask_ps(reach.inPlane)) byFacing(reach, facing());
+    count(reach);
   }
+  // add() on two fours, with one test for a lane in the plane; `facing(k)`
+  // gives four k's facings.
+  template <class Facing>
+  void addTwo(__m128 lowest0, __m128 highest0, __m128 lowest1, __m128 highest1,
+              const Facing& facing) {
+    Reach first = byDistance(lowest0, highest0), second = byDistance(lowest1, highest1);
+    if (_mm_movemask_ps(_mm_or_ps(first.inPlane, second.inPlane))) {
+      byFacing(first, facing(0));
+      byFacing(second, facing(1));
+    }
+    count(first);
+    count(second);
+  }
+
+ private:
+  Reach byDistance(__m128 lowest, __m128 highest) const {
+    return {_mm_and_ps(_mm_cmple_ps(highest, above), _mm_cmpge_ps(lowest, below)),
+            _mm_cmpgt_ps(highest, below), _mm_cmplt_ps(lowest, above)};
+  }
+  // The lanes in the plane reach the side they face (none in it: unchanged).
+  void byFacing(Reach& reach, __m128 facing) const {
+    const __m128 facesFront = _mm_cmpge_ps(facing, zero);
+    reach.front =
+        _mm_or_ps(_mm_and_ps(reach.inPlane, facesFront), _mm_andnot_ps(reach.inPlane, reach.front));
+    reach.back = _mm_or_ps(_mm_andnot_ps(facesFront, reach.inPlane),
+                           _mm_andnot_ps(reach.inPlane, reach.back));
+  }
+  void count(const Reach& reach) {
+    // A mask lane is all ones, -1 as an integer (packed, still -1): adding
+    // counts it, negated. All that reach each side are counted; counts()
+    // finds those reaching both from them.
+    negatedReached = _mm_add_epi16(negatedReached, _mm_packs_epi32(_mm_castps_si128(reach.front),
+                                                                   _mm_castps_si128(reach.back)));
+  }
+
+ public:
   // `triangles`: the lanes added that hold a triangle (not padding). Each
   // reaches a side: out of the plane its highest distance is above the
   // tolerance (so above minus it) or its lowest below minus the tolerance,
@@ -402,18 +434,18 @@ struct TallySse2 {
   // choice: partition decides the lists.) So the triangles reaching both
   // sides are those counted twice.
   Counts counts(std::size_t triangles) const {
-    // Both lane sums at once: lanes interleaved, (f0 + f2, b0 + b2, f1 +
-    // f3, b1 + b3), then its halves added.
-    const __m128i pairs =
-        _mm_add_epi32(_mm_unpacklo_epi32(front, back), _mm_unpackhi_epi32(front, back));
-    const __m128i totals = _mm_add_epi32(pairs, _mm_unpackhi_epi64(pairs, pairs));
+    // Both sides' sums at once: adjacent lanes added into 32 bits, (f0 +
+    // f1, f2 + f3, b0 + b1, b2 + b3), then each side's two.
+    const __m128i pairs = _mm_madd_epi16(negatedReached, _mm_set1_epi16(-1));
+    const __m128i totals = _mm_add_epi32(pairs, _mm_shuffle_epi32(pairs, _MM_SHUFFLE(2, 3, 0, 1)));
     const std::size_t reachFront = static_cast<std::uint32_t>(_mm_cvtsi128_si32(totals));
     const std::size_t reachBack =
-        static_cast<std::uint32_t>(_mm_cvtsi128_si32(_mm_shuffle_epi32(totals, 1)));
+        static_cast<std::uint32_t>(_mm_cvtsi128_si32(_mm_shuffle_epi32(totals, 2)));
     const std::size_t inBoth = reachFront + reachBack - triangles;
     return {reachFront - inBoth, reachBack - inBoth, inBoth};
   }
 };
+
 #endif
 
 // partition's rule, counted, for triangles [begin, end) of `c` against an
@@ -441,6 +473,13 @@ Counts countAxisSplit(const Columns& c, std::size_t begin, std::size_t end, int 
                 [&] { return _mm_xor_ps(_mm_loadu_ps(normal + i), flip); });
   } else {
     // The axis quantiles: most of the axis candidates.
+    // Eight a step: half the loop's own instructions and tests for a lane
+    // in the plane.
+    for (; i + 8 <= end; i += 8)
+      lanes.addTwo(_mm_sub_ps(_mm_loadu_ps(low + i), vd), _mm_sub_ps(_mm_loadu_ps(high + i), vd),
+                   _mm_sub_ps(_mm_loadu_ps(low + i + 4), vd),
+                   _mm_sub_ps(_mm_loadu_ps(high + i + 4), vd),
+                   [&](int four) { return _mm_loadu_ps(normal + i + 4 * std::size_t(four)); });
     for (; i + 4 <= end; i += 4)
       lanes.add(_mm_sub_ps(_mm_loadu_ps(low + i), vd), _mm_sub_ps(_mm_loadu_ps(high + i), vd),
                 [&] { return _mm_loadu_ps(normal + i); });
@@ -465,22 +504,23 @@ Counts countSplit(const Columns& c, std::size_t begin, std::size_t end, const Ei
   const __m128 vx = _mm_set1_ps(nx), vy = _mm_set1_ps(ny), vz = _mm_set1_ps(nz),
                vd = _mm_set1_ps(distance);
   TallySse2 lanes(tolerance);
+  const auto along = [&](int k, std::size_t j) {
+    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(vx, _mm_loadu_ps(&c.corner[k][0][j])),
+                                 _mm_mul_ps(vy, _mm_loadu_ps(&c.corner[k][1][j]))),
+                      _mm_mul_ps(vz, _mm_loadu_ps(&c.corner[k][2][j])));
+  };
+  const auto facing = [&](std::size_t j) {
+    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(&c.normal[0][j]), vx),
+                                 _mm_mul_ps(_mm_loadu_ps(&c.normal[1][j]), vy)),
+                      _mm_mul_ps(_mm_loadu_ps(&c.normal[2][j]), vz));
+  };
+  // The offset subtracted after the lowest and highest are found: float
+  // subtraction is monotonic, so they are those of the differences. (Eight
+  // a step, as in countAxisSplit, saved next to nothing here.)
   for (; i + 4 <= end; i += 4) {
-    const auto along = [&](int k) {
-      return _mm_add_ps(_mm_add_ps(_mm_mul_ps(vx, _mm_loadu_ps(&c.corner[k][0][i])),
-                                   _mm_mul_ps(vy, _mm_loadu_ps(&c.corner[k][1][i]))),
-                        _mm_mul_ps(vz, _mm_loadu_ps(&c.corner[k][2][i])));
-    };
-    const __m128 s0 = along(0), s1 = along(1), s2 = along(2);
-    // The offset subtracted after the lowest and highest are found: float
-    // subtraction is monotonic, so they are those of the differences.
-    const __m128 lowest = _mm_sub_ps(_mm_min_ps(_mm_min_ps(s0, s1), s2), vd);
-    const __m128 highest = _mm_sub_ps(_mm_max_ps(_mm_max_ps(s0, s1), s2), vd);
-    lanes.add(lowest, highest, [&] {
-      return _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(&c.normal[0][i]), vx),
-                                   _mm_mul_ps(_mm_loadu_ps(&c.normal[1][i]), vy)),
-                        _mm_mul_ps(_mm_loadu_ps(&c.normal[2][i]), vz));
-    });
+    const __m128 s0 = along(0, i), s1 = along(1, i), s2 = along(2, i);
+    lanes.add(_mm_sub_ps(_mm_min_ps(_mm_min_ps(s0, s1), s2), vd),
+              _mm_sub_ps(_mm_max_ps(_mm_max_ps(s0, s1), s2), vd), [&] { return facing(i); });
   }
   counts = lanes.counts(std::min(i, c.size) - std::min(begin, c.size));
 #endif
@@ -1250,6 +1290,9 @@ class TreeBuilder {
   // Triangles counted against all candidates at a time: their columns
   // (21 floats each) stay in the first-level cache.
   static constexpr std::size_t kBlock = 256;
+#ifdef BSPC_SSE2
+  static_assert(kBlock / 4 <= 32767, "TallySse2 counts a lane's triangles in 16 bits");
+#endif
   // The sampled split search (chooseSplit).
   // Measured on the shared levels (docs/measurements.md): a sample of 64
   // and a shortlist of 4 above 128 triangles halve the build's instructions
