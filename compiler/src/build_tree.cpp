@@ -827,9 +827,23 @@ class TreeBuilder {
       const bool reachesBack = inPlane ? facing < 0 : lowest < tolerance;
       return std::uint8_t((reachesFront ? kFront : 0) | (reachesBack ? kBack : 0));
     };
-    // The triangles [first, last) classified, `first` a multiple of four;
-    // how many reach each side added to `toFront` and `toBack`.
-    std::function<void(std::size_t, std::size_t, std::size_t&, std::size_t&)> classify;
+    // The triangles [first, last) classified, `first` a multiple of four,
+    // and listed in order from `frontOut` and `backOut` (as many slots as
+    // triangles each: a triangle's unconditional write lands at most at its
+    // own index); how many reach each side. The order lists are written
+    // here, where each triangle's side is at hand, not by a second pass.
+    std::function<std::pair<std::size_t, std::size_t>(std::size_t, std::size_t, std::uint32_t*,
+                                                      std::uint32_t*)>
+        classify;
+    // Written unconditionally, kept by the side's bit: no branch to mispredict.
+    const auto keep = [&](std::uint32_t t, std::uint8_t sides, std::uint32_t*& frontOut,
+                          std::uint32_t*& backOut) {
+      side[t] = sides;
+      *frontOut = t;
+      *backOut = t;
+      frontOut += sides & kFront;
+      backOut += sides >> 1;
+    };
 #ifdef BSPC_SSE2
     // A float signed distance differs from partition's double one by less
     // than `error`: the corners' and the offset's rounding to float (half
@@ -884,7 +898,10 @@ class TreeBuilder {
       return _mm_and_ps(_mm_cmpge_ps(value, lowEdge), _mm_cmple_ps(value, highEdge));
     };
     const std::uint32_t* order = triangles.order.data();
-    classify = [&](std::size_t first, std::size_t last, std::size_t& toFront, std::size_t& toBack) {
+    const __m128i frontCode = _mm_set1_epi32(kFront), backCode = _mm_set1_epi32(kBack);
+    classify = [&](std::size_t first, std::size_t last, std::uint32_t* frontOut,
+                   std::uint32_t* backOut) {
+      std::uint32_t *const frontFirst = frontOut, *const backFirst = backOut;
       std::size_t i = first;
       for (; i + 4 <= last; i += 4) {
         const auto along = [&](int k) {
@@ -914,53 +931,78 @@ class TreeBuilder {
                                               _mm_andnot_ps(inPlane, _mm_cmpgt_ps(highest, below)));
         const __m128 reachesBack = _mm_or_ps(_mm_andnot_ps(facesFront, inPlane),
                                              _mm_andnot_ps(inPlane, _mm_cmplt_ps(lowest, above)));
-        const int frontBits = _mm_movemask_ps(reachesFront),
-                  backBits = _mm_movemask_ps(reachesBack), unsureBits = _mm_movemask_ps(unsure);
+        // The four lanes' sides as the four bytes of one integer.
+        const __m128i sideLanes =
+            _mm_or_si128(_mm_and_si128(_mm_castps_si128(reachesFront), frontCode),
+                         _mm_and_si128(_mm_castps_si128(reachesBack), backCode));
+        const auto sideBytes = static_cast<std::uint32_t>(
+            _mm_cvtsi128_si32(_mm_packus_epi16(_mm_packs_epi32(sideLanes, sideLanes), sideLanes)));
+        const int unsureBits = _mm_movemask_ps(unsure);
+        if (!unsureBits) {
+          // Most fours: spelled out, no lane's test.
+          keep(order[i], std::uint8_t(sideBytes), frontOut, backOut);
+          keep(order[i + 1], std::uint8_t(sideBytes >> 8), frontOut, backOut);
+          keep(order[i + 2], std::uint8_t(sideBytes >> 16), frontOut, backOut);
+          keep(order[i + 3], std::uint8_t(sideBytes >> 24), frontOut, backOut);
+          continue;
+        }
         for (int lane = 0; lane < 4; ++lane) {
           const std::uint32_t t = order[i + std::size_t(lane)];
           const std::uint8_t sides = (unsureBits >> lane) & 1
                                          ? classifyInDouble(t)
-                                         : std::uint8_t(((frontBits >> lane) & 1) * kFront |
-                                                        ((backBits >> lane) & 1) * kBack);
-          side[t] = sides;
-          toFront += sides & kFront;
-          toBack += sides >> 1;
+                                         : std::uint8_t(sideBytes >> (8 * lane));
+          keep(t, sides, frontOut, backOut);
         }
       }
       for (; i < last; ++i) {
         const std::uint32_t t = order[i];
-        const std::uint8_t sides = classifyInDouble(t);
-        side[t] = sides;
-        toFront += sides & kFront;
-        toBack += sides >> 1;
+        keep(t, classifyInDouble(t), frontOut, backOut);
       }
+      return std::pair(std::size_t(frontOut - frontFirst), std::size_t(backOut - backFirst));
     };
 #else
-    classify = [&](std::size_t first, std::size_t last, std::size_t& toFront, std::size_t& toBack) {
+    classify = [&](std::size_t first, std::size_t last, std::uint32_t* frontOut,
+                   std::uint32_t* backOut) {
+      std::uint32_t *const frontFirst = frontOut, *const backFirst = backOut;
       for (std::size_t i = first; i < last; ++i) {
         const std::uint32_t t = triangles.order[i];
-        const std::uint8_t sides = classifyInDouble(t);
-        side[t] = sides;
-        toFront += sides & kFront;
-        toBack += sides >> 1;
+        keep(t, classifyInDouble(t), frontOut, backOut);
       }
+      return std::pair(std::size_t(frontOut - frontFirst), std::size_t(backOut - backFirst));
     };
 #endif
     const bool parallel = pool && triangles.size() > kParallelAbove;
+    const std::size_t n = triangles.size();
+    front.order.resize(n);
+    back.order.resize(n);
     std::size_t toFront = 0, toBack = 0;
     if (parallel) {
-      const std::size_t ranges = (triangles.size() + kParallelRange - 1) / kParallelRange;
+      // Each range listed in its own stretch of the lists, then the
+      // stretches closed up in order.
+      const std::size_t ranges = (n + kParallelRange - 1) / kParallelRange;
       std::vector<std::pair<std::size_t, std::size_t>> reached(ranges);
       runParallel(pool, ranges, 1, [&](int, std::size_t first, std::size_t last) {
         for (std::size_t r = first; r < last; ++r)
-          classify(r * kParallelRange, std::min(triangles.size(), (r + 1) * kParallelRange),
-                   reached[r].first, reached[r].second);
+          reached[r] = classify(r * kParallelRange, std::min(n, (r + 1) * kParallelRange),
+                                front.order.data() + r * kParallelRange,
+                                back.order.data() + r * kParallelRange);
       });
-      for (const auto& [f, b] : reached) toFront += f, toBack += b;
+      for (std::size_t r = 0; r < ranges; ++r) {
+        std::memmove(front.order.data() + toFront, front.order.data() + r * kParallelRange,
+                     reached[r].first * sizeof(std::uint32_t));
+        std::memmove(back.order.data() + toBack, back.order.data() + r * kParallelRange,
+                     reached[r].second * sizeof(std::uint32_t));
+        toFront += reached[r].first;
+        toBack += reached[r].second;
+      }
     } else {
-      classify(0, triangles.size(), toFront, toBack);
+      std::tie(toFront, toBack) = classify(0, n, front.order.data(), back.order.data());
     }
-    if (toFront == triangles.size() || toBack == triangles.size()) return false;
+    if (toFront == n || toBack == n) return false;
+    front.order.resize(toFront);
+    back.order.resize(toBack);
+    triangles.order.clear();
+    triangles.order.shrink_to_fit();
     // A side's list is written when wanted: a child that will be a leaf
     // (few triangles, or at the depth limit) never reads its axis orders.
     const auto share = [&](IndexList& from, IndexList& toFrontList, IndexList& toBackList,
@@ -996,16 +1038,11 @@ class TreeBuilder {
     const auto splitFurther = [&](std::size_t count) {
       return count > settings_.maxLeafTriangles && childDepth < settings_.maxDepth;
     };
-    // The four lists (the order, then each axis's) apart, one a task.
-    const auto shareList = [&](std::size_t list) {
-      if (list == 0)
-        share(triangles.order, front.order, back.order, true, true);
-      else
-        share(triangles.byAxis[list - 1], front.byAxis[list - 1], back.byAxis[list - 1],
-              splitFurther(toFront), splitFurther(toBack));
-    };
-    runParallel(parallel ? pool : nullptr, 4, 1, [&](int, std::size_t first, std::size_t last) {
-      for (std::size_t list = first; list < last; ++list) shareList(list);
+    // The axes' lists apart, one a task.
+    runParallel(parallel ? pool : nullptr, 3, 1, [&](int, std::size_t first, std::size_t last) {
+      for (std::size_t axis = first; axis < last; ++axis)
+        share(triangles.byAxis[axis], front.byAxis[axis], back.byAxis[axis], splitFurther(toFront),
+              splitFurther(toBack));
     });
     return true;
   }
