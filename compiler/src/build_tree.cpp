@@ -573,6 +573,11 @@ class TreeBuilder {
       faceNormals_.push_back((b - a).cross(c - a).normalized());
       centroids_.push_back((a + b + c) / 3.0);
     }
+    if (settings.candidates != SplitCandidates::Axis) {
+      trianglePlanes_.reserve(mesh.triangles.size());
+      for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
+        trianglePlanes_.push_back(trianglePlane(t));
+    }
   }
 
   // The top of the tree is split here, node by node, each node's candidates
@@ -1071,21 +1076,13 @@ class TreeBuilder {
                             2 * std::size_t(settings_.triangleCandidates)))
       tableSize *= 2;
     slots.assign(tableSize, -1);
-    const auto add = [&](const Split& split, int axis, bool flipped) {
-      // + 0.0f: -0 and +0, equal to ==, hash alike.
-      const float key[4] = {split.normal.x() + 0.0f, split.normal.y() + 0.0f,
-                            split.normal.z() + 0.0f, split.distance + 0.0f};
-      // Two words, two multiplications: the hash only picks the first slot
-      // tried, never which candidates are kept or their order.
-      std::uint64_t words[2];
-      std::memcpy(words, key, sizeof words);
-      const std::uint64_t hash =
-          ((words[0] * 0x9E3779B97F4A7C15ull) ^ words[1]) * 0xC2B2AE3D27D4EB4Full;
+    const auto add = [&](const Candidate& candidate, std::uint64_t hash) {
+      const Split& split = candidate.split;
       for (std::size_t slot = std::size_t(hash >> 40) & (tableSize - 1);;
            slot = (slot + 1) & (tableSize - 1)) {
         if (slots[slot] < 0) {
           slots[slot] = static_cast<std::int32_t>(out.size());
-          out.push_back({split, axis, flipped});
+          out.push_back(candidate);
           return;
         }
         const Split& c = out[std::size_t(slots[slot])].split;
@@ -1103,23 +1100,16 @@ class TreeBuilder {
           const float value = static_cast<float>(centroids_[t][axis]);
           if (value == previous) continue;
           previous = value;
-          add({Eigen::Vector3f::Unit(axis), value}, axis, false);
+          const Candidate candidate{{Eigen::Vector3f::Unit(axis), value}, axis, false};
+          add(candidate, planeHash(candidate.split));
         }
       }
     }
     if (settings_.candidates != SplitCandidates::Axis) {
       const std::size_t step = std::max<std::size_t>(1, n / settings_.triangleCandidates);
       for (std::size_t i = 0; i < n; i += step) {
-        const std::uint32_t t = triangles[i];
-        const Eigen::Vector3f normal = faceNormals_[t].cast<float>();
-        const auto distance =
-            static_cast<float>(normal.cast<double>().dot(mesh_.vertices[mesh_.triangles[t][0]]));
-        int axis = -1;
-        for (int a = 0; a < 3; ++a)
-          if (std::abs(normal[a]) == 1.0f && normal[(a + 1) % 3] == 0.0f &&
-              normal[(a + 2) % 3] == 0.0f)
-            axis = a;
-        add({normal, distance}, axis, axis >= 0 && normal[axis] < 0);
+        const TrianglePlane& plane = trianglePlanes_[triangles[i]];
+        add(plane.candidate, plane.hash);
       }
     }
   }
@@ -1130,6 +1120,36 @@ class TreeBuilder {
     Split split;
     std::pair<Box, Box> cells;
   };
+
+  // Picks the first slot candidates() tries for a plane. Two words, two
+  // multiplications: the hash never decides which candidates are kept or
+  // their order.
+  static std::uint64_t planeHash(const Split& split) {
+    // + 0.0f: -0 and +0, equal to ==, hash alike.
+    const float key[4] = {split.normal.x() + 0.0f, split.normal.y() + 0.0f, split.normal.z() + 0.0f,
+                          split.distance + 0.0f};
+    std::uint64_t words[2];
+    std::memcpy(words, key, sizeof words);
+    return ((words[0] * 0x9E3779B97F4A7C15ull) ^ words[1]) * 0xC2B2AE3D27D4EB4Full;
+  }
+
+  // A triangle's own plane as a candidate, with its hash: the same at every
+  // node that samples the triangle, so found once.
+  struct TrianglePlane {
+    Candidate candidate;
+    std::uint64_t hash;
+  };
+  TrianglePlane trianglePlane(std::uint32_t t) const {
+    const Eigen::Vector3f normal = faceNormals_[t].cast<float>();
+    const auto distance =
+        static_cast<float>(normal.cast<double>().dot(mesh_.vertices[mesh_.triangles[t][0]]));
+    int axis = -1;
+    for (int a = 0; a < 3; ++a)
+      if (std::abs(normal[a]) == 1.0f && normal[(a + 1) % 3] == 0.0f && normal[(a + 2) % 3] == 0.0f)
+        axis = a;
+    const Split split{normal, distance};
+    return {{split, axis, axis >= 0 && normal[axis] < 0}, planeHash(split)};
+  }
 
   // Per-thread working memory of the split search.
   struct Scratch {
@@ -1344,6 +1364,7 @@ class TreeBuilder {
   bspf::ThreadPool* pool_;
   std::vector<Eigen::Vector3d> faceNormals_;
   std::vector<Eigen::Vector3d> centroids_;
+  std::vector<TrianglePlane> trianglePlanes_;  // empty when only axis candidates are tried
   std::vector<Scratch> scratch_;
   std::size_t shareSize_ = 0;
   std::vector<TopNode> top_;
