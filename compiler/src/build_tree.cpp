@@ -2,6 +2,7 @@
 #include <bspc/build_tree.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstring>
@@ -220,6 +221,10 @@ void runParallel(bspf::ThreadPool* pool, std::size_t count, std::size_t chunk,
 // from the mesh. A split that leaves every triangle on one side is refused
 // (buildNode). Float halves the memory the counting reads and doubles the
 // triangles an SSE instruction takes.
+// A face normal rounded to float, padded to four floats: the columns take
+// it with one load, not a conversion at every node.
+using FloatNormal = std::array<float, 4>;
+
 struct Columns {
   std::vector<float> corner[3][3];  // [corner][axis]
   std::vector<float> normal[3];
@@ -234,7 +239,7 @@ struct Columns {
   // With a pool, a large node's columns are filled on all its threads, in
   // ranges of whole fours: each triangle's floats are the same either way.
   void gather(const IndexList& triangles, const Mesh& mesh,
-              const std::vector<Eigen::Vector3d>& faceNormals, const Eigen::Vector3d& near,
+              const std::vector<FloatNormal>& faceNormals, const Eigen::Vector3d& near,
               bspf::ThreadPool* pool = nullptr) {
     size = triangles.size();
     padded = (size + 3) & ~std::size_t(3);
@@ -269,7 +274,7 @@ struct Columns {
  private:
   // Columns [first, last) from triangles[first, last); `first` a multiple of four.
   void fill(const IndexList& triangles, const Mesh& mesh,
-            const std::vector<Eigen::Vector3d>& faceNormals, std::size_t first, std::size_t last) {
+            const std::vector<FloatNormal>& faceNormals, std::size_t first, std::size_t last) {
     float* cornerOut[3][3];
     float *normalOut[3], *lowOut[3], *highOut[3];
     for (int axis = 0; axis < 3; ++axis) {
@@ -286,17 +291,15 @@ struct Columns {
     // floats: the same double subtraction and rounding, and
     // _mm_min_ps(b, a) is std::min(a, b) to the bit (so is max).
     const __m128d originXy = _mm_loadu_pd(originAt), originZ = _mm_load_sd(originAt + 2);
-    const auto point = [](const double* at, __m128d shiftXy, __m128d shiftZ) {
-      return _mm_movelh_ps(_mm_cvtpd_ps(_mm_sub_pd(_mm_loadu_pd(at), shiftXy)),
-                           _mm_cvtpd_ps(_mm_sub_sd(_mm_load_sd(at + 2), shiftZ)));
+    const auto point = [&](const double* at) {
+      return _mm_movelh_ps(_mm_cvtpd_ps(_mm_sub_pd(_mm_loadu_pd(at), originXy)),
+                           _mm_cvtpd_ps(_mm_sub_sd(_mm_load_sd(at + 2), originZ)));
     };
-    const __m128d noShift = _mm_setzero_pd();
     // One column each of x, y and z for four points (x, y, z) of four
     // triangles; ((x, y, z, 0) rows turned into columns, the fourth dropped).
     const auto columnsOf = [&](const double* p0, const double* p1, const double* p2,
-                               const double* p3, __m128d shiftXy, __m128d shiftZ, __m128 out[3]) {
-      __m128 r0 = point(p0, shiftXy, shiftZ), r1 = point(p1, shiftXy, shiftZ),
-             r2 = point(p2, shiftXy, shiftZ), r3 = point(p3, shiftXy, shiftZ);
+                               const double* p3, __m128 out[3]) {
+      __m128 r0 = point(p0), r1 = point(p1), r2 = point(p2), r3 = point(p3);
       _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
       out[0] = r0;
       out[1] = r1;
@@ -309,11 +312,15 @@ struct Columns {
                                       &c2 = mesh.triangles[t2], &c3 = mesh.triangles[t3];
       __m128 a[3], b[3], c[3], facing[3];
       const auto vertex = [&](std::uint32_t v) { return mesh.vertices[v].data(); };
-      columnsOf(vertex(c0[0]), vertex(c1[0]), vertex(c2[0]), vertex(c3[0]), originXy, originZ, a);
-      columnsOf(vertex(c0[1]), vertex(c1[1]), vertex(c2[1]), vertex(c3[1]), originXy, originZ, b);
-      columnsOf(vertex(c0[2]), vertex(c1[2]), vertex(c2[2]), vertex(c3[2]), originXy, originZ, c);
-      columnsOf(faceNormals[t0].data(), faceNormals[t1].data(), faceNormals[t2].data(),
-                faceNormals[t3].data(), noShift, noShift, facing);
+      columnsOf(vertex(c0[0]), vertex(c1[0]), vertex(c2[0]), vertex(c3[0]), a);
+      columnsOf(vertex(c0[1]), vertex(c1[1]), vertex(c2[1]), vertex(c3[1]), b);
+      columnsOf(vertex(c0[2]), vertex(c1[2]), vertex(c2[2]), vertex(c3[2]), c);
+      __m128 n0 = _mm_loadu_ps(faceNormals[t0].data()), n1 = _mm_loadu_ps(faceNormals[t1].data()),
+             n2 = _mm_loadu_ps(faceNormals[t2].data()), n3 = _mm_loadu_ps(faceNormals[t3].data());
+      _MM_TRANSPOSE4_PS(n0, n1, n2, n3);
+      facing[0] = n0;
+      facing[1] = n1;
+      facing[2] = n2;
       for (int axis = 0; axis < 3; ++axis) {
         _mm_storeu_ps(cornerOut[0][axis] + i, a[axis]);
         _mm_storeu_ps(cornerOut[1][axis] + i, b[axis]);
@@ -329,7 +336,7 @@ struct Columns {
       const std::array<std::uint32_t, 3>& corners = mesh.triangles[t];
       const double* at[3] = {mesh.vertices[corners[0]].data(), mesh.vertices[corners[1]].data(),
                              mesh.vertices[corners[2]].data()};
-      const double* facing = faceNormals[t].data();
+      const float* facing = faceNormals[t].data();
       const auto fillAxis = [&](int axis) {
         const auto a = static_cast<float>(at[0][axis] - originAt[axis]);
         const auto b = static_cast<float>(at[1][axis] - originAt[axis]);
@@ -337,7 +344,7 @@ struct Columns {
         cornerOut[0][axis][i] = a;
         cornerOut[1][axis][i] = b;
         cornerOut[2][axis][i] = c;
-        normalOut[axis][i] = static_cast<float>(facing[axis]);
+        normalOut[axis][i] = facing[axis];
         lowOut[axis][i] = std::min(std::min(a, b), c);
         highOut[axis][i] = std::max(std::max(a, b), c);
       };
@@ -566,11 +573,15 @@ class TreeBuilder {
               const std::function<void(int)>& progress, bspf::ThreadPool* pool)
       : mesh_(mesh), settings_(settings), progress_(progress), pool_(pool) {
     faceNormals_.reserve(mesh.triangles.size());
+    floatNormals_.reserve(mesh.triangles.size());
     centroids_.reserve(mesh.triangles.size());
     for (const auto& t : mesh.triangles) {
       const Eigen::Vector3d &a = mesh.vertices[t[0]], &b = mesh.vertices[t[1]],
                             &c = mesh.vertices[t[2]];
       faceNormals_.push_back((b - a).cross(c - a).normalized());
+      const Eigen::Vector3d& normal = faceNormals_.back();
+      floatNormals_.push_back({static_cast<float>(normal.x()), static_cast<float>(normal.y()),
+                               static_cast<float>(normal.z()), 0.0f});
       centroids_.push_back((a + b + c) / 3.0);
     }
     if (settings.candidates != SplitCandidates::Axis) {
@@ -1230,11 +1241,11 @@ class TreeBuilder {
     if (n <= kParallelAbove) pool = nullptr;
     candidates(lists, scratch.candidates, scratch.slots);
     const Eigen::Vector3d middle = (cell.low + cell.high) / 2;
-    scratch.columns.gather(lists.order, mesh_, faceNormals_, middle, pool);
+    scratch.columns.gather(lists.order, mesh_, floatNormals_, middle, pool);
     if (n > kSampledAbove && scratch.candidates.size() > kShortlist) {
       scratch.sample.resize(kSample);
       for (std::size_t i = 0; i < kSample; ++i) scratch.sample[i] = lists.order[i * n / kSample];
-      scratch.sampleColumns.gather(scratch.sample, mesh_, faceNormals_, middle);
+      scratch.sampleColumns.gather(scratch.sample, mesh_, floatNormals_, middle);
       countAll(scratch.candidates, scratch.sampleColumns, scratch, nullptr, scratch.counts);
       scratch.estimates.clear();
       for (std::size_t i = 0; i < scratch.candidates.size(); ++i)
@@ -1363,6 +1374,7 @@ class TreeBuilder {
   const std::function<void(int)>& progress_;
   bspf::ThreadPool* pool_;
   std::vector<Eigen::Vector3d> faceNormals_;
+  std::vector<FloatNormal> floatNormals_;
   std::vector<Eigen::Vector3d> centroids_;
   std::vector<TrianglePlane> trianglePlanes_;  // empty when only axis candidates are tried
   std::vector<Scratch> scratch_;
