@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <exception>
@@ -47,66 +48,77 @@ struct Box {
       if (std::abs(n[axis]) == 1.0 && n[(axis + 1) % 3] == 0.0 && n[(axis + 2) % 3] == 0.0)
         return {clippedOnAxis(axis, n[axis], split.distance, 1.0),
                 clippedOnAxis(axis, n[axis], split.distance, -1.0)};
-    double corners[8][3];
+    // Corner i: bit k set, the high end on axis k.
     double along[8];
     for (int i = 0; i < 8; ++i) {
       const Eigen::Vector3d corner(i & 1 ? high.x() : low.x(), i & 2 ? high.y() : low.y(),
                                    i & 4 ? high.z() : low.z());
       along[i] = n.dot(corner) - split.distance;
-      for (int axis = 0; axis < 3; ++axis) corners[i][axis] = corner[axis];
     }
-    // The twelve edges: corner i, corner j = i with the axis's bit set.
-    static constexpr int kEdges[12][3] = {{0, 1, 0}, {2, 3, 0}, {4, 5, 0}, {6, 7, 0},
-                                          {0, 2, 1}, {1, 3, 1}, {4, 6, 1}, {5, 7, 1},
-                                          {0, 4, 2}, {1, 5, 2}, {2, 6, 2}, {3, 7, 2}};
-    // Both sides in one pass. A corner at distance 0 belongs to both. An
-    // edge crossing the plane with a corner on each side (the usual case)
-    // crosses it at the same point for both: the back's -a / (-a - -b) is
-    // a / (a - b) to the bit, as IEEE negation and subtraction are exact
-    // mirror images. An edge with a corner at distance 0 crosses for one
-    // side only, which takes its own side's arithmetic (its sign of zero).
-    double lo[2][3], hi[2][3];
-    for (int keep = 0; keep < 2; ++keep)
-      for (int axis = 0; axis < 3; ++axis) {
-        lo[keep][axis] = std::numeric_limits<double>::infinity();
-        hi[keep][axis] = -std::numeric_limits<double>::infinity();
-      }
-    const auto add = [&](int keep, const double* at) {
-      for (int axis = 0; axis < 3; ++axis) {
-        lo[keep][axis] = std::min(lo[keep][axis], at[axis]);
-        hi[keep][axis] = std::max(hi[keep][axis], at[axis]);
-      }
-    };
+    // Bit i: corner i is on that side (at distance 0, on both).
+    unsigned sideCorners[2] = {0, 0};
     for (int i = 0; i < 8; ++i) {
-      if (along[i] >= 0) add(0, corners[i]);
-      if (along[i] <= 0) add(1, corners[i]);
+      sideCorners[0] |= unsigned(along[i] >= 0) << i;
+      sideCorners[1] |= unsigned(along[i] <= 0) << i;
+    }
+    // The corners on an axis's low face (the axis's bit clear).
+    static constexpr unsigned kLowFace[3] = {0x55, 0x33, 0x0F};
+    double lo[2][3], hi[2][3];
+    for (int keep = 0; keep < 2; ++keep) {
+      const unsigned kept = sideCorners[keep];
+      if (!kept) continue;
+      for (int axis = 0; axis < 3; ++axis) {
+        // A side's corners, taken in order into a running min and max (the
+        // first of equal values stays: the sign of a zero can tell them
+        // apart), come to at most two values an axis, low's and high's.
+        const bool atLow = kept & kLowFace[axis], atHigh = kept & ~kLowFace[axis];
+        if (atLow && atHigh) {
+          const bool highFirst = (unsigned(std::countr_zero(kept)) >> axis) & 1;
+          const double first = highFirst ? high[axis] : low[axis],
+                       second = highFirst ? low[axis] : high[axis];
+          lo[keep][axis] = std::min(first, second);
+          hi[keep][axis] = std::max(first, second);
+        } else {
+          lo[keep][axis] = hi[keep][axis] = atLow ? low[axis] : high[axis];
+        }
+      }
     }
     // A crossing moves only along its edge's axis, and its other
-    // coordinates are those of its edge's corner on that side, already
-    // added: only the axis's bounds can change.
+    // coordinates are those of its edge's corner on that side: only the
+    // axis's bounds can change. An edge crossing the plane with a corner on
+    // each side (the usual case) crosses it at the same point for both: the
+    // back's -a / (-a - -b) is a / (a - b) to the bit, as IEEE negation and
+    // subtraction are exact mirror images. An edge with a corner at
+    // distance 0 crosses for one side only, which takes its own side's
+    // arithmetic (its sign of zero). Each axis's edges in order of their
+    // low corner, as the sides' running min and max took them.
     const auto addCrossing = [&](int keep, int axis, double at) {
       lo[keep][axis] = std::min(lo[keep][axis], at);
       hi[keep][axis] = std::max(hi[keep][axis], at);
     };
-    for (const auto& [i, j, axis] : kEdges) {
-      const bool frontCrosses = (along[i] >= 0) != (along[j] >= 0);
-      const bool backCrosses = (along[i] <= 0) != (along[j] <= 0);
-      if (!frontCrosses && !backCrosses) continue;
-      const double from = corners[i][axis], span = corners[j][axis] - corners[i][axis];
-      if (frontCrosses && backCrosses) {
-        const double at = from + along[i] / (along[i] - along[j]) * span;
-        addCrossing(0, axis, at);
-        addCrossing(1, axis, at);
-      } else if (frontCrosses) {
-        addCrossing(0, axis, from + along[i] / (along[i] - along[j]) * span);
-      } else {
-        const double sideI = -along[i], sideJ = -along[j];
-        addCrossing(1, axis, from + sideI / (sideI - sideJ) * span);
+    for (int axis = 0; axis < 3; ++axis) {
+      const int bit = 1 << axis;
+      const unsigned frontCrossing = (sideCorners[0] ^ (sideCorners[0] >> bit)) & kLowFace[axis];
+      const unsigned backCrossing = (sideCorners[1] ^ (sideCorners[1] >> bit)) & kLowFace[axis];
+      const double span = high[axis] - low[axis];
+      for (unsigned edges = frontCrossing | backCrossing; edges; edges &= edges - 1) {
+        const int i = std::countr_zero(edges), j = i | bit;
+        const unsigned edge = 1u << i;
+        if (frontCrossing & backCrossing & edge) {
+          const double at = low[axis] + along[i] / (along[i] - along[j]) * span;
+          addCrossing(0, axis, at);
+          addCrossing(1, axis, at);
+        } else if (frontCrossing & edge) {
+          addCrossing(0, axis, low[axis] + along[i] / (along[i] - along[j]) * span);
+        } else {
+          const double sideI = -along[i], sideJ = -along[j];
+          addCrossing(1, axis, low[axis] + sideI / (sideI - sideJ) * span);
+        }
       }
     }
     Box boxes[2];
     for (int keep = 0; keep < 2; ++keep) {
-      if (lo[keep][0] <= hi[keep][0] && lo[keep][1] <= hi[keep][1] && lo[keep][2] <= hi[keep][2])
+      if (sideCorners[keep])
         boxes[keep] = {Eigen::Vector3d(lo[keep][0], lo[keep][1], lo[keep][2]),
                        Eigen::Vector3d(hi[keep][0], hi[keep][1], hi[keep][2])};
       else
