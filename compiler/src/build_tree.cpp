@@ -1091,7 +1091,18 @@ class TreeBuilder {
   // of them all was a tenth of the build).
   void candidates(const Lists& lists, std::vector<Candidate>& out,
                   std::vector<std::int32_t>& slots) const {
-    out.clear();
+    const auto n = lists.size();
+    const IndexList& triangles = lists.order;
+    const bool axisPlanes = settings_.candidates != SplitCandidates::Triangle,
+               trianglePlanes = settings_.candidates != SplitCandidates::Axis;
+    const std::uint32_t quantiles = settings_.axisCandidatesPerAxis;
+    const std::size_t step = std::max<std::size_t>(1, n / settings_.triangleCandidates);
+    // Room for every plane tried, written by index: push_back, not inlined,
+    // was a third of this.
+    const std::size_t most = (axisPlanes ? 3 * std::size_t(quantiles) : 0) +
+                             (trianglePlanes ? (n + step - 1) / step : 0);
+    if (out.size() < most) out.resize(most);
+    std::size_t kept = 0;
     // At most half full: fewer than twice triangleCandidates triangle planes
     // (the stride rounds down) besides the axis planes.
     std::size_t tableSize = 64;
@@ -1104,18 +1115,15 @@ class TreeBuilder {
       for (std::size_t slot = std::size_t(hash >> 40) & (tableSize - 1);;
            slot = (slot + 1) & (tableSize - 1)) {
         if (slots[slot] < 0) {
-          slots[slot] = static_cast<std::int32_t>(out.size());
-          out.push_back(candidate);
+          slots[slot] = static_cast<std::int32_t>(kept);
+          out[kept++] = candidate;
           return;
         }
         const Split& c = out[std::size_t(slots[slot])].split;
         if (c.distance == split.distance && c.normal == split.normal) return;
       }
     };
-    const auto n = lists.size();
-    const IndexList& triangles = lists.order;
-    if (settings_.candidates != SplitCandidates::Triangle) {
-      const std::uint32_t quantiles = settings_.axisCandidatesPerAxis;
+    if (axisPlanes) {
       for (int axis = 0; axis < 3; ++axis) {
         float previous = std::numeric_limits<float>::quiet_NaN();
         for (std::uint32_t q = 1; q <= quantiles; ++q) {
@@ -1128,13 +1136,13 @@ class TreeBuilder {
         }
       }
     }
-    if (settings_.candidates != SplitCandidates::Axis) {
-      const std::size_t step = std::max<std::size_t>(1, n / settings_.triangleCandidates);
+    if (trianglePlanes) {
       for (std::size_t i = 0; i < n; i += step) {
         const TrianglePlane& plane = trianglePlanes_[triangles[i]];
         add(plane.candidate, plane.hash);
       }
     }
+    out.resize(kept);
   }
 
   // The split chooseSplit picks, with the boxes around its two cells (front,
