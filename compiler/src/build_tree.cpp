@@ -1267,9 +1267,9 @@ class TreeBuilder {
       for (std::size_t i = 0; i < kSample; ++i) scratch.sample[i] = lists.order[i * n / kSample];
       scratch.sampleColumns.gather(scratch.sample, mesh_, floatNormals_, middle);
       countAll(scratch.candidates, scratch.sampleColumns, scratch, nullptr, scratch.counts);
-      scratch.estimates.clear();
+      scratch.estimates.resize(scratch.candidates.size());
       for (std::size_t i = 0; i < scratch.candidates.size(); ++i)
-        scratch.estimates.push_back({score(scratch.counts[i], double(kSample)), i});
+        scratch.estimates[i] = {score(scratch.counts[i], double(kSample)), i};
       // Stable: of equal estimates, the earlier candidate.
       std::nth_element(scratch.estimates.begin(), scratch.estimates.begin() + kShortlist,
                        scratch.estimates.end());
@@ -1289,22 +1289,23 @@ class TreeBuilder {
   // triangles are in scratch.counts.
   std::optional<Chosen> select(const std::vector<Candidate>& candidates, std::size_t n,
                                const Box& cell, Scratch& scratch) const {
-    scratch.counted.clear();
+    // Written by index, as in candidates().
+    if (scratch.counted.size() < candidates.size()) scratch.counted.resize(candidates.size());
+    std::size_t kept = 0;
     const double count = static_cast<double>(n);
     for (std::size_t i = 0; i < candidates.size(); ++i) {
       const Counts& c = scratch.counts[i];
       if (c.front + c.both == n || c.back + c.both == n) continue;
       const double frontTotal = double(c.front + c.both), backTotal = double(c.back + c.both);
-      scratch.counted.push_back(
-          {candidates[i].split, frontTotal, backTotal, score(c, count), std::nullopt});
+      scratch.counted[kept++] = {candidates[i].split, frontTotal, backTotal, score(c, count),
+                                 std::nullopt};
     }
     // The lowest score that pays, the earliest candidate of equal scores:
     // candidates in that order, the first that pays. Its cells are clipped
     // only when asked, as most candidates never are.
     // Ranks sorted, not the candidates, whose cells make them large to move.
-    scratch.ranked.clear();
-    for (std::size_t i = 0; i < scratch.counted.size(); ++i)
-      scratch.ranked.push_back({scratch.counted[i].score, i});
+    scratch.ranked.resize(kept);
+    for (std::size_t i = 0; i < kept; ++i) scratch.ranked[i] = {scratch.counted[i].score, i};
     std::sort(scratch.ranked.begin(), scratch.ranked.end());
     auto best = [&](double reach) -> std::optional<Chosen> {
       const double whole = cell.reachVolume(reach);
