@@ -173,8 +173,8 @@ int main(int argc, char** argv) {
       ->type_name("XZ Y")
       ->default_str("0.45 0.85");
   app.add_option("--threads", settings.threads,
-                 "Threads for the tree and the planes (0: every core); the blob is the same "
-                 "for any count")
+                 "Threads for the stages after clean: face rules, reach, tree, planes (0: every "
+                 "core); the blob is the same for any count")
       ->type_name("N")
       ->capture_default_str();
   bool keepCovered = false;

@@ -7,7 +7,6 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
-#include <exception>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -23,6 +22,8 @@
 #include <string>
 #include <type_traits>
 #include <utility>
+
+#include "parallel.h"
 
 namespace bspc {
 
@@ -199,28 +200,6 @@ struct Lists {
 // threads costs more than they save.
 constexpr std::size_t kParallelAbove = 4096;
 constexpr std::size_t kParallelRange = 1024;
-
-// Runs `task(thread, first, last)` over [0, count) on `pool`, or on this
-// thread without one; an exception thrown by a task (out of memory) is
-// carried back to the caller instead of ending the process.
-void runParallel(bspf::ThreadPool* pool, std::size_t count, std::size_t chunk,
-                 const std::function<void(int, std::size_t, std::size_t)>& task) {
-  if (!pool) {
-    if (count) task(0, 0, count);
-    return;
-  }
-  std::mutex mutex;
-  std::exception_ptr failure;
-  pool->parallelFor(count, chunk, [&](int thread, std::size_t first, std::size_t last) {
-    try {
-      task(thread, first, last);
-    } catch (...) {
-      std::lock_guard lock(mutex);
-      if (!failure) failure = std::current_exception();
-    }
-  });
-  if (failure) std::rethrow_exception(failure);
-}
 
 // The node's triangles as columns of floats, for the split search: the
 // corners (relative to `origin`, near the node, so that float keeps them to

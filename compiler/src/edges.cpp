@@ -3,15 +3,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <exception>
 #include <memory>
-#include <mutex>
 #include <numbers>
 #include <numeric>
 #include <span>
 #include <tuple>
 
 #include "flat_map.h"
+#include "parallel.h"
 
 namespace bspc {
 
@@ -96,42 +95,8 @@ class EdgeMap {
   std::vector<std::array<std::pair<std::size_t, std::size_t>, 3>> group_;
 };
 
-// Calls `task(first, last)` on ranges covering [0, count): on `pool`'s
-// threads when there is one, else on this one. Each triangle's result lands
-// in its own slot, so the output is the same on any number of threads.
-// `task` must not throw (it only reads and fills sized arrays).
-template <class Task>
-void forRanges(bspf::ThreadPool* pool, std::size_t count, const Task& task) {
-  constexpr std::size_t kRange = 1024;
-  if (pool)
-    pool->parallelFor(count, kRange,
-                      [&](int, std::size_t first, std::size_t last) { task(first, last); });
-  else
-    task(0, count);
-}
-
-// forRanges for a task that may throw (it allocates) and keeps working
-// memory per thread: `task(thread, first, last)`, `thread` below the pool's
-// thread count (0 without a pool). The first exception is thrown here.
-template <class Task>
-void forThreadRanges(bspf::ThreadPool* pool, std::size_t count, const Task& task) {
-  constexpr std::size_t kRange = 256;
-  if (!pool) {
-    task(0, 0, count);
-    return;
-  }
-  std::mutex mutex;
-  std::exception_ptr failure;
-  pool->parallelFor(count, kRange, [&](int thread, std::size_t first, std::size_t last) {
-    try {
-      task(thread, first, last);
-    } catch (...) {
-      std::lock_guard lock(mutex);
-      if (!failure) failure = std::current_exception();
-    }
-  });
-  if (failure) std::rethrow_exception(failure);
-}
+// Per-triangle passes are handed out in ranges of this many.
+constexpr std::size_t kTriangleRange = 1024;
 
 struct Geometry {
   const Mesh& mesh;
@@ -143,18 +108,20 @@ struct Geometry {
   Geometry(const Mesh& m, bspf::ThreadPool* pool) : mesh(m) {
     normal.resize(m.triangles.size());
     inward.resize(m.triangles.size());
-    forRanges(pool, m.triangles.size(), [&](std::size_t first, std::size_t last) {
-      for (std::size_t t = first; t < last; ++t) {
-        const auto& corners = m.triangles[t];
-        normal[t] = (m.vertices[corners[1]] - m.vertices[corners[0]])
-                        .cross(m.vertices[corners[2]] - m.vertices[corners[0]])
-                        .normalized();
-        for (int k = 0; k < 3; ++k)
-          inward[t][k] = normal[t]
-                             .cross(corner(std::uint32_t(t), k + 1) - corner(std::uint32_t(t), k))
-                             .normalized();
-      }
-    });
+    runParallel(pool, m.triangles.size(), kTriangleRange,
+                [&](int, std::size_t first, std::size_t last) {
+                  for (std::size_t t = first; t < last; ++t) {
+                    const auto& corners = m.triangles[t];
+                    normal[t] = (m.vertices[corners[1]] - m.vertices[corners[0]])
+                                    .cross(m.vertices[corners[2]] - m.vertices[corners[0]])
+                                    .normalized();
+                    for (int k = 0; k < 3; ++k)
+                      inward[t][k] =
+                          normal[t]
+                              .cross(corner(std::uint32_t(t), k + 1) - corner(std::uint32_t(t), k))
+                              .normalized();
+                  }
+                });
   }
   const V3& corner(std::uint32_t t, int k) const { return mesh.vertices[mesh.triangles[t][k % 3]]; }
   // The angle, in [0, 2 pi), from triangle t (turning through `side`, t's
@@ -203,7 +170,7 @@ Turn firstTurn(const Geometry& g, const EdgeMap& edges, std::uint32_t t, int k, 
 using BackTurns = std::vector<std::array<Turn, 3>>;
 BackTurns backTurns(const Geometry& g, const EdgeMap& edges, bspf::ThreadPool* pool) {
   BackTurns back(g.mesh.triangles.size());
-  forRanges(pool, back.size(), [&](std::size_t first, std::size_t last) {
+  runParallel(pool, back.size(), kTriangleRange, [&](int, std::size_t first, std::size_t last) {
     for (auto t = std::uint32_t(first); t < last; ++t)
       for (int k = 0; k < 3; ++k) back[t][k] = firstTurn(g, edges, t, k, -g.normal[t]);
   });
@@ -544,7 +511,8 @@ std::vector<bool> findCoveredFaces(const SolidEdges& solid, bspf::ThreadPool* po
       dropped[f] = covered(g, f, cover, scratch);
     }
   };
-  forThreadRanges(pool, n, decide);
+  // Ranges of 256: a face's clipping takes far longer than one's normals.
+  runParallel(pool, n, 256, decide);
   return std::vector<bool>(dropped.begin(), dropped.end());
 }
 
@@ -601,7 +569,7 @@ std::vector<TriangleEdges> classifyEdges(const Mesh& mesh, bspf::ThreadPool* poo
   const Geometry g(mesh, pool);
   const EdgeMap edges(mesh);
   std::vector<TriangleEdges> out(mesh.triangles.size());
-  forRanges(pool, out.size(), [&](std::size_t first, std::size_t last) {
+  runParallel(pool, out.size(), kTriangleRange, [&](int, std::size_t first, std::size_t last) {
     for (auto t = std::uint32_t(first); t < last; ++t) {
       for (int k = 0; k < 3; ++k) {
         const Turn first = firstTurn(g, edges, t, k, g.normal[t]);

@@ -162,7 +162,8 @@ struct CompileSettings {
   TreeSettings tree;
   LimitSettings limits;
   ReachSettings reach;
-  /// Threads the tree build and the plane precompute run on; 0, the default,
+  /// Threads the stages after clean (the face rules, the reach flood's
+  /// distance passes, the tree build, the planes) run on; 0, the default,
   /// takes every core (std::thread::hardware_concurrency). 0 to 1024. Only
   /// the speed depends on it: the blob is the same, byte for byte, for any
   /// count, so it is not recorded in the blob's options.
