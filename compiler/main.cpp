@@ -77,8 +77,9 @@ std::string readable(const std::string& message) {
 // glibc hands each such block back to the kernel when it is freed, so the
 // next one is faulted in afresh, a page at a time, zeroed (oacmpctf3: 50,000
 // page faults, about a sixth of the run). Kept in the heap instead, they
-// are reused. A tool's choice, made here: the library leaves the process's
-// allocator alone.
+// are reused: a third fewer faults, tree and planes 11% faster there, for
+// 15% more peak memory (kPeakBytesPerTriangle). A tool's choice, made here:
+// the library leaves the process's allocator alone.
 void keepFreedMemoryForReuse() {
 #ifdef __GLIBC__
   constexpr int kLargest = 1 << 30;
