@@ -481,7 +481,12 @@ std::vector<bool> findCoveredFaces(const SolidEdges& solid, bspf::ThreadPool* po
   std::vector<Working> working(pool ? std::size_t(pool->threadCount()) : 1);
   std::vector<std::uint8_t> dropped(n, 0);
   const auto decide = [&](int thread, std::size_t first, std::size_t last) {
-    auto& [around, cover, scratch] = working[std::size_t(thread)];
+    // Named, not a structured binding: the lambda below captures `cover`,
+    // which C++20 allows of a binding but clang 14 does not.
+    Working& mine = working[std::size_t(thread)];
+    PlaneBuckets::Around& around = mine.around;
+    std::vector<std::uint32_t>& cover = mine.cover;
+    ClipScratch& scratch = mine.scratch;
     for (auto f = std::uint32_t(first); f < last; ++f) {
       const V3 opposite = -g.normal[f];
       const double d = opposite.dot(g.corner(f, 0));
