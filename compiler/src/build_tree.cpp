@@ -201,6 +201,10 @@ struct Lists {
 constexpr std::size_t kParallelAbove = 4096;
 constexpr std::size_t kParallelRange = 1024;
 
+// A face normal rounded to float, padded to four floats: the columns take
+// it with one load, not a conversion at every node.
+using FloatNormal = std::array<float, 4>;
+
 // The node's triangles as columns of floats, for the split search: the
 // corners (relative to `origin`, near the node, so that float keeps them to
 // a small fraction of the on-plane tolerance), the face normal, and each
@@ -212,10 +216,6 @@ constexpr std::size_t kParallelRange = 1024;
 // from the mesh. A split that leaves every triangle on one side is refused
 // (buildNode). Float halves the memory the counting reads and doubles the
 // triangles an SSE instruction takes.
-// A face normal rounded to float, padded to four floats: the columns take
-// it with one load, not a conversion at every node.
-using FloatNormal = std::array<float, 4>;
-
 struct Columns {
   std::vector<float> corner[3][3];  // [corner][axis]
   std::vector<float> normal[3];
@@ -443,7 +443,6 @@ struct TallySse2 {
     return {reachFront - inBoth, reachBack - inBoth, inBoth};
   }
 };
-
 #endif
 
 // partition's rule, counted, for triangles [begin, end) of `c` against an
@@ -582,9 +581,9 @@ class TreeBuilder {
     }
   }
 
-  // The top of the tree is split here, node by node, each node's candidates
-  // counted on every thread, down to subtrees small enough to share out
-  // (several per thread); the subtrees are then built on all threads at once,
+  // The top of the tree is split here (expand: level by level, on every
+  // thread), down to subtrees small enough to share out (several per
+  // thread); the subtrees are then built on all threads at once,
   // each on one, and put together in the order one thread would have made
   // them. Which thread builds what never changes a split, so the tree is the
   // same for any thread count.
