@@ -16,9 +16,12 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string_view>
 #include <utility>
 #include <vector>
+
+#include "import_obj.h"
 
 namespace bspc {
 
@@ -72,6 +75,12 @@ std::string surfaceName(const aiScene& scene, const aiMesh& mesh) {
   return text.empty() || text == AI_DEFAULT_MATERIAL_NAME ? kDefaultSurface : text;
 }
 
+// A source vertex where `transform` puts it in the level.
+Eigen::Vector3d placed(const Eigen::Matrix4d& transform, float x, float y, float z) {
+  const Eigen::Vector4d q = transform * Eigen::Vector4d(x, y, z, 1.0);
+  return q.head<3>();
+}
+
 void appendScene(const aiScene& scene, const Eigen::Matrix4d& root, Mesh& out) {
   std::map<std::string, std::uint32_t> surfaceIds;  // name -> index in out.surfaces
   std::vector<std::pair<const aiNode*, Eigen::Matrix4d>> pending{{scene.mRootNode, root}};
@@ -90,8 +99,7 @@ void appendScene(const aiScene& scene, const Eigen::Matrix4d& root, Mesh& out) {
       const std::uint32_t surface = named->second;
       for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
         const aiVector3D& p = mesh.mVertices[v];
-        const Eigen::Vector4d q = transform * Eigen::Vector4d(p.x, p.y, p.z, 1.0);
-        out.vertices.emplace_back(q.head<3>());
+        out.vertices.push_back(placed(transform, p.x, p.y, p.z));
       }
       for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
         const aiFace& face = mesh.mFaces[f];
@@ -166,6 +174,26 @@ UpAxis colladaDeclaredUp(const std::filesystem::path& path) {
 
 }  // namespace
 
+std::optional<Mesh> importPlainObj(const std::filesystem::path& path,
+                                   const ImportSettings& settings) {
+  const std::optional<std::vector<std::array<float, 3>>> corners = readPlainObjCorners(path);
+  if (!corners) return std::nullopt;
+  // As appendScene converts assimp's scene of it: one mesh under the root
+  // node, each corner its own vertex, no node transform of its own.
+  const Eigen::Matrix4d transform = sourceToLevel(settings);
+  const bool mirrors = transform.topLeftCorner<3, 3>().determinant() < 0;
+  Mesh mesh;
+  mesh.vertices.reserve(corners->size());
+  for (const auto& [x, y, z] : *corners) mesh.vertices.push_back(placed(transform, x, y, z));
+  const auto triangles = static_cast<std::uint32_t>(corners->size() / 3);
+  mesh.triangles.reserve(triangles);
+  for (std::uint32_t t = 0; t < triangles; ++t)
+    mesh.triangles.push_back({3 * t, 3 * t + (mirrors ? 2 : 1), 3 * t + (mirrors ? 1 : 2)});
+  mesh.surfaces = {kDefaultSurface};
+  mesh.triangleSurfaces.assign(triangles, 0);
+  return mesh;
+}
+
 Mesh importMesh(const std::filesystem::path& path, const ImportSettings& settings) {
   {
     // assimp's own message for a missing file is vague; say why plainly.
@@ -179,6 +207,8 @@ Mesh importMesh(const std::filesystem::path& path, const ImportSettings& setting
     std::ifstream probe(path, std::ios::binary);
     if (!probe) throw CompileError(std::string("cannot open: ") + std::strerror(errno));
   }
+  if (settings.readPlainObj)
+    if (std::optional<Mesh> mesh = importPlainObj(path, settings)) return std::move(*mesh);
   Assimp::Importer importer;
   // Files the scene names (an OBJ's material library, say) are opened the
   // same way: a FIFO among them must not block the compile either.

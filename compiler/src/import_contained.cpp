@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstring>
 #include <new>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -256,6 +257,10 @@ class Child {
 }  // namespace
 
 Mesh importMeshContained(const std::filesystem::path& path, const ImportSettings& settings) {
+  // bspc's own reader needs no containing: it reads nothing but numbers
+  // into arrays the file's size bounds.
+  if (settings.readPlainObj)
+    if (std::optional<Mesh> mesh = importPlainObj(path, settings)) return std::move(*mesh);
   const std::uint64_t cap = memoryCap(path, settings);
   int fds[2];
   if (::pipe2(fds, O_CLOEXEC) != 0)

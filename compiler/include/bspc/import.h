@@ -6,19 +6,39 @@
 #include <bspc/settings.h>
 
 #include <filesystem>
+#include <optional>
 
 namespace bspc {
 
 /// Reads every mesh of the scene at `path`, applies each node's transform (a
 /// mesh used by two nodes appears twice), triangulates polygons, drops points
 /// and lines, rotates `settings.up` to Y and scales to metres. Does not weld
-/// or drop anything else. Throws CompileError when the file cannot be read or
-/// parsed, or holds no triangles.
+/// or drop anything else. A plain OBJ is read by importPlainObj (unless
+/// settings.readPlainObj is false), every other file by assimp. Throws
+/// CompileError when the file cannot be read or parsed, or holds no
+/// triangles.
 /// A Collada file that declares its up axis X_UP or Z_UP (<up_axis> in its
 /// <asset>) is turned to Y up by assimp itself; for such a file
 /// `settings.up` other than Y is not applied (it would turn the level over
 /// again), and the mesh's warnings say so.
 Mesh importMesh(const std::filesystem::path& path, const ImportSettings& settings);
+
+/// importMesh's mesh of a plain OBJ, read by bspc's own reader in this
+/// process (ImportSettings::readPlainObj, which importMesh and
+/// importMeshContained try first): a file of only `v x y z` lines (decimal
+/// numbers), triangle `f a b c` lines (vertex indices, 1-based or negative:
+/// counted back from the last vertex so far), `#` comments and blank lines.
+/// The mesh is the one assimp reads, bit for bit: a vertex per triangle
+/// corner, in file order, the coordinates parsed as assimp parses them, one
+/// surface (kDefaultSurface), `settings.up` and `settings.scale` applied.
+/// Returns nothing, and reads nothing further, for every other file: one
+/// that is not a regular file, holds any other statement (objects, groups,
+/// materials, texture coordinates or normals, polygons, points, lines, line
+/// continuations, a byte order mark), a number or index in another form,
+/// an index out of range, no face, or more than 1 GiB (left to assimp's
+/// contained import, whose memory is capped). Throws only std::bad_alloc.
+std::optional<Mesh> importPlainObj(const std::filesystem::path& path,
+                                   const ImportSettings& settings);
 
 /// importMesh in a child process, so that no file can crash, hang or exhaust
 /// this one: the child (made by fork) imports and sends the mesh back over a
