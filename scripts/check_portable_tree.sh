@@ -16,18 +16,4 @@ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DBSPC_PORTABLE_ONLY=ON \
   -DBSPF_BUILD_TESTS=OFF -DBSPF_BUILD_BENCH=OFF -DBSPF_BUILD_SAMPLES=OFF >/dev/null
 cmake --build "$build" --target bspc -j "$jobs"
 
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
-shared=${BSPF_SHARED_LEVELS:-../shared/levels}
-levels=(samples/*.obj)
-[ -d "$shared" ] && levels+=("$shared"/*.obj)
-for level in "${levels[@]}"; do
-  name=$(basename "$level" .obj)
-  "$usual" -q "$level" -o "$out/$name.usual.bspf"
-  "$build/compiler/bspc" -q "$level" -o "$out/$name.portable.bspf"
-  if ! cmp -s "$out/$name.usual.bspf" "$out/$name.portable.bspf"; then
-    echo "check_portable_tree: $level: the portable tree build wrote a different blob" >&2
-    exit 1
-  fi
-done
-echo "check_portable_tree: ${#levels[@]} levels, the same blobs from both paths"
+scripts/same_blobs.sh "the portable tree build" "$usual" "$build/compiler/bspc"

@@ -4,7 +4,8 @@
 # and UndefinedBehaviorSanitizer and run the tests that feed hostile input;
 # build with ThreadSanitizer and run the threading tests; fuzz each libFuzzer
 # target for a minute (scripts/fuzz.sh); build optimised with assertions on;
-# build everything with clang and run its tests (scripts/clang-build.sh);
+# build everything with clang and run its tests (scripts/clang-build.sh),
+# and check its bspc writes the same blobs as GCC's (scripts/same_blobs.sh);
 # cross-compile the runtime and its tests for Windows and run them under wine
 # (scripts/cross-windows.sh); check that the tree build's portable paths
 # write the same blobs as its SSE2 ones (scripts/check_portable_tree.sh);
@@ -48,6 +49,8 @@ cmake --build build-test -j"$jobs"
 if [ "${BSPF_SKIP_PORTS:-0}" != 1 ]; then
   # Every target built with clang, warnings as errors, and its tests run.
   timeout 1500 scripts/clang-build.sh
+  # Blobs do not depend on the compiler that built bspc.
+  scripts/same_blobs.sh "clang's bspc" build-test/compiler/bspc build-clang/compiler/bspc
   # The runtime and its tests cross-compiled for Windows and run under wine;
   # this build's bspc compiles the sample levels they open.
   BSPC=build-test/compiler/bspc timeout 900 scripts/cross-windows.sh

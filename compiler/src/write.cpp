@@ -80,22 +80,34 @@ std::vector<std::uint8_t> serializeWorld(const Mesh& mesh,
   flatbuffers::FlatBufferBuilder fbb(1024 + mesh.triangles.size() * 160);
   fbb.ForceDefaults(true);
   const CleanReport& clean = metadata.clean;
+  // Every part serialised in its own statement, in one fixed order: as
+  // arguments of one call they were serialised in the order the compiler
+  // chose (GCC's right to left, clang's left to right), and so were the
+  // blob's bytes. The order is GCC's, which wrote every blob before.
+  const auto sourceFile = fbb.CreateString(metadata.sourceFile);
+  const auto options = fbb.CreateString(describeOptions(metadata.settings));
+  const auto version = fbb.CreateString("bspc " BSPF_VERSION);
   const auto build = fb::CreateBuildInfo(
-      fbb, fbb.CreateString("bspc " BSPF_VERSION),
-      fbb.CreateString(describeOptions(metadata.settings)), fbb.CreateString(metadata.sourceFile),
-      toSchema(metadata.settings.import.up), static_cast<float>(metadata.settings.import.scale),
-      clean.inputTriangles, clean.inputVertices, clean.weldedVertices, clean.droppedDegenerate,
-      clean.droppedZeroArea, clean.droppedDuplicate, metadata.settings.tree.maxLeafTriangles,
-      metadata.settings.tree.maxDepth, clean.droppedBySurface);
+      fbb, version, options, sourceFile, toSchema(metadata.settings.import.up),
+      static_cast<float>(metadata.settings.import.scale), clean.inputTriangles, clean.inputVertices,
+      clean.weldedVertices, clean.droppedDegenerate, clean.droppedZeroArea, clean.droppedDuplicate,
+      metadata.settings.tree.maxLeafTriangles, metadata.settings.tree.maxDepth,
+      clean.droppedBySurface);
   const fb::Vec3 boundsMin(low.x(), low.y(), low.z());
   const fb::Vec3 boundsMax(high.x(), high.y(), high.z());
+  const auto surfaceIds = fbb.CreateVector(triangleSurfaces);
+  const auto surfaceTable = fbb.CreateVectorOfStrings(surfaceNames);
+  const auto leafBoxes = fbb.CreateVectorOfStructs(leafBounds);
+  const auto leafEntries = fbb.CreateVector(tree.leafTriangles);
+  const auto leaves = fbb.CreateVectorOfStructs(tree.leaves);
+  const auto nodes = fbb.CreateVectorOfStructs(tree.nodes);
+  const auto planeTable = fbb.CreateVectorOfStructs(planes);
+  const auto triangleTable = fbb.CreateVectorOfStructs(triangles);
+  const auto vertexTable = fbb.CreateVectorOfStructs(vertices);
   const auto world =
       fb::CreateWorld(fbb, bspf::kFormatVersion, 1.0f, fb::UpAxis::Y, &boundsMin, &boundsMax, build,
-                      fbb.CreateVectorOfStructs(vertices), fbb.CreateVectorOfStructs(triangles),
-                      fbb.CreateVectorOfStructs(planes), fbb.CreateVectorOfStructs(tree.nodes),
-                      fbb.CreateVectorOfStructs(tree.leaves), fbb.CreateVector(tree.leafTriangles),
-                      tree.root, tree.depth, fbb.CreateVectorOfStructs(leafBounds),
-                      fbb.CreateVectorOfStrings(surfaceNames), fbb.CreateVector(triangleSurfaces));
+                      vertexTable, triangleTable, planeTable, nodes, leaves, leafEntries, tree.root,
+                      tree.depth, leafBoxes, surfaceTable, surfaceIds);
   fbb.FinishSizePrefixed(world, bspf::kFileIdentifier);
   return {fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()};
 }
