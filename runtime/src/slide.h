@@ -84,8 +84,9 @@ inline float nearbyPad(float moveLength) { return 0.5f * moveLength + 0.3f; }
 template <typename Cold, typename Make>
 class LocalCandidates {
  public:
-  LocalCandidates(detail::MadeCandidates<Cold>& made, std::vector<detail::CandidateBlock>& listed,
-                  std::vector<std::uint64_t>& sorted, Make make)
+  LocalCandidates(detail::MadeCandidates<Cold>& made,
+                  detail::UnzeroedVector<detail::CandidateBlock>& listed,
+                  detail::UnzeroedVector<std::uint64_t>& sorted, Make make)
       : made_(made), listed_(listed), sorted_(sorted), make_(make) {}
 
   /// Blocks holding (at least) the candidates whose box may overlap
@@ -123,19 +124,23 @@ class LocalCandidates {
       workspace.lastScanned = made_.cold.size();
       return workspace.lastBlocks = current_ = made_.blocks;
     }
-    listed_.clear();
+    // Room for every block, kept between slides (growing it writes nothing:
+    // UnzeroedVector), where adding each block zeroed it.
+    if (listed_.size() < made_.blocks.size()) listed_.resize(made_.blocks.size());
     std::size_t count = 0;
     for (const detail::CandidateBlock& block : made_.blocks) {
       for (std::uint32_t bits = detail::boxMask(block, local_); bits != 0; bits &= bits - 1) {
         const int lane = std::countr_zero(bits);
-        if (count % detail::kBlockLanes == 0) listed_.emplace_back();
-        detail::copyLane(block, lane, listed_.back(), int(count % detail::kBlockLanes));
+        detail::copyLane(block, lane, listed_[count / detail::kBlockLanes],
+                         int(count % detail::kBlockLanes));
         ++count;
       }
     }
-    detail::finishBlocks(listed_, count);
+    const std::span<detail::CandidateBlock> packed(
+        listed_.data(), (count + detail::kBlockLanes - 1) / detail::kBlockLanes);
+    detail::finishBlocks(packed, count);
     workspace.lastScanned = count;
-    return workspace.lastBlocks = current_ = listed_;
+    return workspace.lastBlocks = current_ = packed;
   }
 
   Cold& operator[](std::uint32_t slot) { return made_.cold[slot]; }
@@ -190,8 +195,8 @@ class LocalCandidates {
   static constexpr float kAheadMetres = 0.8f;
   static constexpr std::size_t kScanWholeBlocks = 6;
   detail::MadeCandidates<Cold>& made_;
-  std::vector<detail::CandidateBlock>& listed_;
-  std::vector<std::uint64_t>& sorted_;
+  detail::UnzeroedVector<detail::CandidateBlock>& listed_;
+  detail::UnzeroedVector<std::uint64_t>& sorted_;
   Make make_;
   Bounds local_;
   bool valid_ = false;
