@@ -80,8 +80,8 @@ Move makeMove(const Vec3& start, const Vec3& end, EllipsoidRadii radii, float wa
   // top edge) does not block: the walkable face behind it holds the body
   // (rounded_edges.h).
   if (normal.y() < move.walkableNormalY &&
-      detail::ridesOverEdge(world, candidate.triangle, point, move.start, move.end, move.radii,
-                            move.walkableNormalY))
+      detail::ridesOverEdge(world, candidate.triangle, candidate.grown.highestY, point, move.start,
+                            move.end, move.radii, move.walkableNormalY))
     return;
   const float facing = normal.dot(move.step);
   const std::uint32_t t = candidate.triangle;
@@ -204,6 +204,7 @@ void growPlanes(const World& world, std::uint32_t triangle, EllipsoidRadii radii
     }
   }
   for (int k = 6; k < 8; ++k) grown.set(k, Vec3::Zero(), kAlways);
+  grown.highestY = highestCornerY(world, triangle);
   grown.ready = true;
 }
 

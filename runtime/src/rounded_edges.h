@@ -28,6 +28,13 @@ inline bool beyondEdges(const schema::TrianglePlanes& planes, const Vec3& point)
   return false;
 }
 
+/// The largest y of triangle `triangle`'s corners.
+inline float highestCornerY(const World& world, std::uint32_t triangle) {
+  const schema::Triangle& corners = world.triangles()[triangle];
+  return std::max({world.vertices()[corners.v0()].y(), world.vertices()[corners.v1()].y(),
+                   world.vertices()[corners.v2()].y()});
+}
+
 /// Whether a steep triangle's six planes block a body centred at `point`
 /// only through a squared-off edge that the rounded body would ride over
 /// (the exact sweep's rule for the edge of a step): `point`, where the
@@ -39,13 +46,11 @@ inline bool beyondEdges(const schema::TrianglePlanes& planes, const Vec3& point)
 /// its bottom. The centre's path never crosses such a triangle. The
 /// walkable surface behind its edge holds the body instead (the top of a
 /// 1 cm lip, the floor beside a gap narrower than the body).
-inline bool ridesOverEdge(const World& world, std::uint32_t triangle, const Vec3& point,
-                          const Vec3& start, const Vec3& end, EllipsoidRadii radii,
-                          float walkableNormalY) {
-  const schema::Triangle& corners = world.triangles()[triangle];
-  const float highest =
-      std::max({world.vertices()[corners.v0()].y(), world.vertices()[corners.v1()].y(),
-                world.vertices()[corners.v2()].y()});
+/// `highest`: highestCornerY(world, triangle), which the slide keeps with
+/// the triangle's grown planes (GrownTriangle::highestY).
+inline bool ridesOverEdge(const World& world, std::uint32_t triangle, float highest,
+                          const Vec3& point, const Vec3& start, const Vec3& end,
+                          EllipsoidRadii radii, float walkableNormalY) {
   const float below = std::min(start.y(), end.y()) - highest;
   // A triangle reaching above the centre's path (most walls a body walks
   // into) fails the test below whatever `least` is: no square root for it.

@@ -48,6 +48,11 @@ struct alignas(16) GrownTriangle {
   /// when dot(normal, p) >= offset for every k. Lanes 6 and 7 always hold
   /// (zero normal, offset -infinity), so the test takes two groups of 4.
   float normalX[8], normalY[8], normalZ[8], offset[8];
+  /// The triangle's highest corner y (highestCornerY), for the rounded
+  /// edge test: kept here, it costs one load where reading the triangle's
+  /// corners from the level took three scattered ones (the test runs for
+  /// most steep candidates a scan finds inside their planes).
+  float highestY;
   bool ready = false;
 
   void set(int k, const Vec3& normal, float planeOffset) {
