@@ -307,7 +307,7 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     if (move.squaredNorm() < 1e-14f) break;
     const Vec3 from = p.cwiseQuotient(toSphere);
     const Vec3 to = (p + move).cwiseQuotient(toSphere);
-    const Bounds swept = sweptBounds(from, to, radii);
+    const Bounds swept = detail::slideSweptBounds(from, to, radii);
     Impact impact;
     std::uint32_t impactSlot = 0;  // the candidate `impact` is with
     bool penetrating = false;

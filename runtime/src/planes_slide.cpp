@@ -234,7 +234,7 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
     hintsLeft |= std::uint32_t(hints[k] != kNoTriangle) << k;
   const detail::PlanesMaskFunction planesMask = detail::planesMaskFunction();
   for (int iteration = 0;; ++iteration) {
-    const Bounds swept = sweptBounds(start, result.end, radii);
+    const Bounds swept = detail::slideSweptBounds(start, result.end, radii);
     const Move move = makeMove(start, result.end, radii, walkableNormalY);
     const std::span<const detail::CandidateBlock> blocks =
         local.around(world, swept, moveLength, radii, scratch, desiredEnd - start);
