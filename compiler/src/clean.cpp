@@ -82,23 +82,37 @@ class FirstCopies {
   std::size_t size_ = 0;
 };
 
-// Beyond this many tolerances from 0, a coordinate is keyed by its exact
-// value: a float that large has no other float within a tolerance of it (its
-// neighbours are at least |c| / 2^25 away), so only equal coordinates can weld.
-constexpr double kGridCells = 4294967296.0;  // 2^32
-// Exact keys start here, beyond every grid cell index (at most 2^32 + 1).
+// Beyond this many cells from 0, a coordinate is keyed by its exact value:
+// a float that large has no other float within a tolerance of it (its
+// neighbours are at least |c| / 2^25 away), so only equal coordinates can
+// weld.
+constexpr double kGridCells = 1073741824.0;  // 2^30
+// Grid cells are this many tolerances wide. A vertex looks in its own cell
+// and, along each axis, in the neighbouring cell only when it lies within a
+// tolerance of that side: about 3.4 cells, against 27 for cells one
+// tolerance wide (each look-up a likely cache miss). Wider cells would hold
+// more of the kept vertices, which are only known to be a tolerance apart.
+constexpr double kCellTolerances = 4;
+// Exact keys start here, beyond every grid cell index (at most 2^30 + 1).
 constexpr std::int64_t kExactKeys = std::int64_t(1) << 40;
 
 // Maps every vertex to the first earlier vertex within `tolerance` (itself if
 // none). The result depends only on the input order, never on hash order.
 // Near-linear for every tolerance: each axis of a vertex is keyed either by a
-// grid cell one tolerance wide (so a match lies in the 3 cells around it) or
-// by its exact value (tolerance 0, or far from 0 against the tolerance; a
-// match then has the same value). The vertices kept are more than a
-// tolerance apart, so a key holds a bounded number of them.
+// grid cell kCellTolerances tolerances wide (so a match lies in its cell or
+// the one next to it) or by its exact value (tolerance 0, or far from 0
+// against the tolerance; a match then has the same value). The vertices
+// kept are more than a tolerance apart, so a key holds a bounded number of
+// them.
 std::vector<std::uint32_t> weld(const std::vector<Eigen::Vector3d>& vertices, double tolerance) {
   std::vector<std::uint32_t> target(vertices.size());
   const double tolerance2 = tolerance * tolerance;
+  const double cellWidth = kCellTolerances * tolerance;
+  // How near a cell's side, in cells, a vertex looks across it too: a
+  // tolerance, and a margin for the rounding of c / cellWidth (a cell index
+  // is below 2^30, so off by under 2^-22). Looking in a cell too many only
+  // costs the look-up: the distance test decides.
+  const double nearSide = 1 / kCellTolerances + 1e-4;
   // The vertices kept in each cell, as a chain through `kept`: the cell's
   // latest, then each one's predecessor.
   struct Kept {
@@ -112,12 +126,19 @@ std::vector<std::uint32_t> weld(const std::vector<Eigen::Vector3d>& vertices, do
   // same cells, where every vertex kept since lies after the first one's
   // answer. -0 and +0 are one position.
   FirstCopies firstCopies(vertices);
-  // Whether the axis is keyed by value, and the key.
-  auto keyOf = [&](double c, bool& exact) {
-    exact = !(std::abs(c) <= kGridCells * tolerance) || tolerance == 0;
-    if (!exact) return static_cast<std::int64_t>(std::floor(c / tolerance));
-    // -0 and +0 are one position; clean has rounded c to a float already.
-    return kExactKeys + std::bit_cast<std::uint32_t>(static_cast<float>(c) + 0.0f);
+  // An axis's key, and the cells either side to look in too (0 or -1, 0 or
+  // 1): none when it is keyed by value.
+  struct AxisKey {
+    std::int64_t key;
+    int below = 0, above = 0;
+  };
+  auto keyOf = [&](double c) {
+    if (tolerance == 0 || !(std::abs(c) <= kGridCells * cellWidth))
+      // -0 and +0 are one position; clean has rounded c to a float already.
+      return AxisKey{kExactKeys + std::bit_cast<std::uint32_t>(static_cast<float>(c) + 0.0f)};
+    const double cells = c / cellWidth, cell = std::floor(cells);
+    return AxisKey{static_cast<std::int64_t>(cell), cells - cell < nearSide ? -1 : 0,
+                   cell + 1 - cells < nearSide ? 1 : 0};
   };
   for (std::uint32_t i = 0; i < vertices.size(); ++i) {
     const Eigen::Vector3d& p = vertices[i];
@@ -125,14 +146,12 @@ std::vector<std::uint32_t> weld(const std::vector<Eigen::Vector3d>& vertices, do
       target[i] = target[first];
       continue;
     }
-    bool exact[3];
-    const CellKey home{keyOf(p.x(), exact[0]), keyOf(p.y(), exact[1]), keyOf(p.z(), exact[2])};
-    auto reach = [&](int axis) { return exact[axis] ? 0 : 1; };
+    const AxisKey x = keyOf(p.x()), y = keyOf(p.y()), z = keyOf(p.z());
     std::uint32_t best = i;
-    for (std::int64_t dx = -reach(0); dx <= reach(0); ++dx)
-      for (std::int64_t dy = -reach(1); dy <= reach(1); ++dy)
-        for (std::int64_t dz = -reach(2); dz <= reach(2); ++dz) {
-          const std::uint32_t* latest = cellLatest.find({home.x + dx, home.y + dy, home.z + dz});
+    for (int dx = x.below; dx <= x.above; ++dx)
+      for (int dy = y.below; dy <= y.above; ++dy)
+        for (int dz = z.below; dz <= z.above; ++dz) {
+          const std::uint32_t* latest = cellLatest.find({x.key + dx, y.key + dy, z.key + dz});
           for (std::uint32_t e = latest ? *latest : kEndOfCell; e != kEndOfCell;
                e = kept[e].previous) {
             const std::uint32_t j = kept[e].vertex;
@@ -142,7 +161,7 @@ std::vector<std::uint32_t> weld(const std::vector<Eigen::Vector3d>& vertices, do
     target[i] = best;
     if (best == i) {
       const auto entry = static_cast<std::uint32_t>(kept.size());
-      const auto [latest, added] = cellLatest.tryEmplace(home, entry);
+      const auto [latest, added] = cellLatest.tryEmplace({x.key, y.key, z.key}, entry);
       kept.push_back({i, added ? kEndOfCell : *latest});
       *latest = entry;
     }
