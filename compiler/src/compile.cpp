@@ -83,11 +83,6 @@ std::vector<std::uint8_t> compileCleanStages(
   const Mesh cleaned = timed(report.seconds.clean, report.cpuSeconds.clean,
                              [&] { return cleanMesh(mesh, settings.clean, report.clean); });
   report.warnings = mesh.warnings;
-  // The mesh checks count as cleaning; they need the closed pieces the next
-  // stage opens.
-  std::vector<std::string> warnings =
-      timed(report.seconds.clean, report.cpuSeconds.clean, [&] { return meshWarnings(cleaned); });
-  for (std::string& warning : warnings) report.warnings.push_back(std::move(warning));
   // Workers only when there is more than one thread to run on.
   std::optional<bspf::ThreadPool> pool;
   if (threadCount(settings) > 1) pool.emplace(threadCount(settings));
@@ -96,11 +91,18 @@ std::vector<std::uint8_t> compileCleanStages(
   // dropping covered faces opens them.
   say(settings, kTreeFirstPercent, "drop covered and buried faces");
   std::vector<bool> keep(cleaned.triangles.size(), true);
-  // Both rules turn about the same edges: found once, counted as edges.
+  // Both rules and the mesh checks turn about the same edges: found once,
+  // counted as edges.
   std::optional<SolidEdges> solidEdges;
   if (settings.dropCoveredFaces || settings.dropBuriedFaces)
     timed(report.seconds.edges, report.cpuSeconds.edges,
           [&] { solidEdges.emplace(cleaned, threads); });
+  // The mesh checks count as cleaning; they need the closed pieces the next
+  // stage opens.
+  std::vector<std::string> warnings = timed(report.seconds.clean, report.cpuSeconds.clean, [&] {
+    return solidEdges ? meshWarnings(*solidEdges) : meshWarnings(cleaned);
+  });
+  for (std::string& warning : warnings) report.warnings.push_back(std::move(warning));
   if (settings.dropCoveredFaces) {
     const std::vector<bool> covered = timed(report.seconds.edges, report.cpuSeconds.edges,
                                             [&] { return findCoveredFaces(*solidEdges, threads); });

@@ -570,6 +570,24 @@ std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const SolidEdges& soli
   return out;
 }
 
+std::vector<std::array<std::uint32_t, 3>> pairedNeighbours(const SolidEdges& solid) {
+  const Geometry& g = solid.parts().geometry;
+  const EdgeMap& edges = solid.parts().edges;
+  const std::size_t n = g.mesh.triangles.size();
+  constexpr std::uint32_t kNone = ~std::uint32_t(0);
+  std::vector<std::array<std::uint32_t, 3>> out(n, {kNone, kNone, kNone});
+  for (std::uint32_t t = 0; t < n; ++t)
+    for (int k = 0; k < 3; ++k) {
+      // Two uses of the edge, one each way: the edge used once in each
+      // direction. (A triangle of distinct corners uses an edge once.)
+      const std::span<const EdgeUse> around = edges.around(t, k);
+      if (around.size() != 2) continue;
+      const EdgeUse& other = around[0].triangle == t ? around[1] : around[0];
+      if (g.consistent(t, k, other.triangle, other.k)) out[t][k] = other.triangle;
+    }
+  return out;
+}
+
 std::vector<TriangleEdges> classifyEdges(const Mesh& mesh, bspf::ThreadPool* pool) {
   const Geometry g(mesh, pool);
   const EdgeMap edges(mesh);

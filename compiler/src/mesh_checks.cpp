@@ -1,4 +1,5 @@
 // SPDX-License-Identifier: MIT
+#include <bspc/edges.h>
 #include <bspc/mesh_checks.h>
 
 #include <algorithm>
@@ -142,8 +143,9 @@ ClosedPieces findClosedPieces(const Mesh& mesh, std::vector<std::array<std::uint
   return out;
 }
 
-PieceCounts countClosedPieces(const Mesh& mesh) {
-  const ClosedPieces pieces = findClosedPieces(mesh);
+namespace {
+
+PieceCounts countPieces(const ClosedPieces& pieces) {
   PieceCounts counts;
   counts.closedPieces = static_cast<std::uint32_t>(pieces.volume6.size());
   for (std::size_t p = 0; p < pieces.volume6.size(); ++p)
@@ -154,9 +156,8 @@ PieceCounts countClosedPieces(const Mesh& mesh) {
   return counts;
 }
 
-std::vector<std::string> meshWarnings(const Mesh& clean) {
+std::vector<std::string> warningsFor(const Mesh& clean, const PieceCounts& pieces) {
   std::vector<std::string> warnings;
-  const PieceCounts pieces = countClosedPieces(clean);
   if (pieces.insideOutPieces > 0) {
     std::ostringstream line;
     line << pieces.insideOutPieces << " of " << pieces.closedPieces << " closed pieces ("
@@ -178,6 +179,19 @@ std::vector<std::string> meshWarnings(const Mesh& clean) {
     }
   }
   return warnings;
+}
+
+}  // namespace
+
+PieceCounts countClosedPieces(const Mesh& mesh) { return countPieces(findClosedPieces(mesh)); }
+
+std::vector<std::string> meshWarnings(const Mesh& clean) {
+  return warningsFor(clean, countClosedPieces(clean));
+}
+
+std::vector<std::string> meshWarnings(const SolidEdges& edges) {
+  const Mesh& clean = edges.mesh();
+  return warningsFor(clean, countPieces(findClosedPieces(clean, pairedNeighbours(edges))));
 }
 
 }  // namespace bspc

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include <bspc/clean.h>
 #include <bspc/compile.h>
+#include <bspc/edges.h>
 #include <bspc/mesh_checks.h>
 
 #include <algorithm>
@@ -61,6 +62,30 @@ TEST_CASE("closed pieces wound inward are counted, those facing out and open sur
     std::swap(mesh.triangles[0][1], mesh.triangles[0][2]);
     std::swap(mesh.triangles[1][1], mesh.triangles[1][2]);
     CHECK(bspc::countClosedPieces(mesh).closedPieces == 0);
+  }
+}
+
+TEST_CASE("the closed pieces from the face rules' edges are those paired by vertex index",
+          "[compiler][mesh-checks]") {
+  bspc::Mesh shared = box(0, 2);
+  bspf::test::append(shared, bspf::test::boxMesh({2, 2, 0}, {4, 4, 2}));
+  bspc::CleanReport cleaned;
+  shared = bspc::cleanMesh(shared, {}, cleaned);
+  bspc::Mesh open = insideOut(box(0, 2));
+  open.triangles.resize(10);
+  bspc::Mesh flipped = box(0, 2);
+  std::swap(flipped.triangles[0][1], flipped.triangles[0][2]);
+  bspc::Mesh three = box(5e4, 2);
+  bspf::test::append(three, insideOut(box(5e4 + 3, 2)));
+  bspf::test::append(three, box(5e4 + 6, 2));
+  for (const bspc::Mesh* mesh : {&shared, &open, &flipped, &three}) {
+    const bspc::SolidEdges edges(*mesh);
+    const bspc::ClosedPieces byIndex = bspc::findClosedPieces(*mesh);
+    const bspc::ClosedPieces byEdges = bspc::findClosedPieces(*mesh, bspc::pairedNeighbours(edges));
+    CHECK(byEdges.pieceOf == byIndex.pieceOf);
+    CHECK(byEdges.volume6 == byIndex.volume6);
+    CHECK(byEdges.across == byIndex.across);
+    CHECK(bspc::meshWarnings(edges) == bspc::meshWarnings(*mesh));
   }
 }
 

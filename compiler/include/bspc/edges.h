@@ -88,6 +88,12 @@ std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const Mesh& mesh);
 /// The same, from `edges` of the mesh (shared with findCoveredFaces).
 std::vector<std::array<std::uint32_t, 3>> solidNeighbours(const SolidEdges& edges);
 
+/// Per triangle, edge k: the other triangle when exactly two share the edge
+/// and they run along it opposite ways, or ~0u: the pairing by
+/// vertex index that findClosedPieces(mesh) (mesh_checks.h) makes, from the
+/// edges already grouped for the face rules.
+std::vector<std::array<std::uint32_t, 3>> pairedNeighbours(const SolidEdges& edges);
+
 /// A triangle's three edges (edge k from corner k to corner k + 1).
 struct TriangleEdges {
   std::array<EdgeKind, 3> kind{};

@@ -12,6 +12,8 @@
 
 namespace bspc {
 
+class SolidEdges;  // edges.h
+
 /// The closed pieces of a mesh: sets of triangles joined by shared edges in
 /// which every edge is shared by exactly two triangles, once in each
 /// direction (a closed, consistently wound surface, such as a brush).
@@ -69,5 +71,8 @@ inline constexpr double kSmallestLikelyLevelMetres = 1;
 /// [kSmallestLikelyLevelMetres, kLargestLikelyLevelMetres]. Empty when
 /// neither applies.
 std::vector<std::string> meshWarnings(const Mesh& clean);
+/// The same, from `edges` of the cleaned mesh: its edges grouped once for
+/// the face rules and these checks.
+std::vector<std::string> meshWarnings(const SolidEdges& edges);
 
 }  // namespace bspc
