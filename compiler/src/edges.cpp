@@ -344,10 +344,14 @@ void PlaneBuckets::forNeighbours(const PlaneKey& home, Around& around, Visit&& v
 
 using Polygon = std::vector<V2>;
 
-double area(const Polygon& p) {
+// The next corner after corner i of a polygon of `count`: a comparison, not
+// a division (the clipping's inner loops).
+std::size_t nextCorner(std::size_t i, std::size_t count) { return i + 1 == count ? 0 : i + 1; }
+
+double area(std::span<const V2> p) {
   double twice = 0;
   for (std::size_t i = 0; i < p.size(); ++i) {
-    const V2 &a = p[i], &b = p[(i + 1) % p.size()];
+    const V2 &a = p[i], &b = p[nextCorner(i, p.size())];
     twice += a.x() * b.y() - a.y() * b.x();
   }
   return twice / 2;
@@ -362,15 +366,21 @@ void split(const Polygon& p, const V2& a, const V2& along, double margin, Polygo
     const V2 r = q - a;
     return along.x() * r.y() - along.y() * r.x() + margin;
   };
+  if (p.empty()) return;
+  // Each corner's side worked out once, and carried to the next edge.
+  const double firstSide = side(p[0]);
+  double s = firstSide;
   for (std::size_t i = 0; i < p.size(); ++i) {
-    const V2 &q = p[i], &next = p[(i + 1) % p.size()];
-    const double s = side(q), sNext = side(next);
+    const std::size_t j = nextCorner(i, p.size());
+    const V2 &q = p[i], &next = p[j];
+    const double sNext = j == 0 ? firstSide : side(next);
     (s >= 0 ? inside : outside).push_back(q);
     if ((s >= 0) != (sNext >= 0)) {
       const V2 cross = q + (next - q) * (s / (s - sNext));
       inside.push_back(cross);
       outside.push_back(cross);
     }
+    s = sNext;
   }
 }
 
@@ -416,7 +426,8 @@ bool covered(const Geometry& g, std::uint32_t f, const std::vector<std::uint32_t
   constexpr double kMargin = 1e-4, kLeftArea = 1e-8;
   constexpr std::size_t kMaxPieces = 256;
   for (const std::uint32_t c : cover) {
-    Polygon shape{flat(g.corner(c, 0)), flat(g.corner(c, 1)), flat(g.corner(c, 2))};
+    // On the stack: a face can have many covering faces.
+    std::array<V2, 3> shape{flat(g.corner(c, 0)), flat(g.corner(c, 1)), flat(g.corner(c, 2))};
     if (area(shape) < 0) std::reverse(shape.begin(), shape.end());
     next.clear();
     for (std::size_t i = 0; i < left.size(); ++i) {
