@@ -424,13 +424,30 @@ bool covered(const Geometry& g, std::uint32_t f, const std::vector<std::uint32_t
   left.clear();
   left.push_back(std::array{flat(g.corner(f, 0)), flat(g.corner(f, 1)), flat(g.corner(f, 2))});
   constexpr double kMargin = 1e-4, kLeftArea = 1e-8;
+  // Beyond a cover's box by this much, a piece is beyond its margin too
+  // (but past a needle-thin cover's sharp corners, where the margin
+  // reaches further: such a piece stays uncovered, which keeps the face).
+  constexpr double kReach = 4 * kMargin;
   constexpr std::size_t kMaxPieces = 256;
   for (const std::uint32_t c : cover) {
     // On the stack: a face can have many covering faces.
     std::array<V2, 3> shape{flat(g.corner(c, 0)), flat(g.corner(c, 1)), flat(g.corner(c, 2))};
     if (area(shape) < 0) std::reverse(shape.begin(), shape.end());
+    // What the cover can reach, its margin included: a piece wholly beyond
+    // it is left whole. Clipped, it would come back in fragments (one for
+    // each edge line it crosses), which the next covers would clip again.
+    const V2 reachLow = shape[0].cwiseMin(shape[1]).cwiseMin(shape[2]);
+    const V2 reachHigh = shape[0].cwiseMax(shape[1]).cwiseMax(shape[2]);
     next.clear();
     for (std::size_t i = 0; i < left.size(); ++i) {
+      const std::span<const V2> whole = left[i];
+      V2 low = whole[0], high = whole[0];
+      for (const V2& q : whole) low = low.cwiseMin(q), high = high.cwiseMax(q);
+      if ((low.array() > reachHigh.array() + kReach).any() ||
+          (high.array() < reachLow.array() - kReach).any()) {
+        next.push_back(whole);
+        continue;
+      }
       piece.assign(left[i].begin(), left[i].end());
       for (int e = 0; e < 3 && !piece.empty(); ++e) {
         const V2 along = (shape[(e + 1) % 3] - shape[e]).normalized();
