@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <span>
 #include <type_traits>
@@ -96,13 +97,17 @@ struct alignas(16) GrownTriangle {
 inline Bounds slideSweptBounds(const Vec3& from, const Vec3& to, EllipsoidRadii radii) {
 #ifdef BSPF_SSE_MASKS
   // A Vec3 is 3 packed floats: loaded as x and y, then z (the fourth lane
-  // zero), and stored back the same way.
+  // zero), and stored back the same way. x and y move as 8 bytes through
+  // memcpy (one 8-byte load or store): a Vec3 is only 4-byte aligned, and a
+  // double access there is undefined (UndefinedBehaviorSanitizer reports it).
   auto load = [](const Vec3& v) {
-    return _mm_movelh_ps(_mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(v.data()))),
-                         _mm_load_ss(v.data() + 2));
+    double xy;
+    std::memcpy(&xy, v.data(), sizeof xy);
+    return _mm_movelh_ps(_mm_castpd_ps(_mm_set_sd(xy)), _mm_load_ss(v.data() + 2));
   };
   auto store = [](__m128 lanes, Vec3& v) {
-    _mm_store_sd(reinterpret_cast<double*>(v.data()), _mm_castps_pd(lanes));
+    const double xy = _mm_cvtsd_f64(_mm_castps_pd(lanes));
+    std::memcpy(v.data(), &xy, sizeof xy);
     _mm_store_ss(v.data() + 2, _mm_movehl_ps(lanes, lanes));
   };
   const __m128 f = load(from), t = load(to);
