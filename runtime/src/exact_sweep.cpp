@@ -12,7 +12,14 @@
 #include <limits>
 
 #include "narrow_phase.h"
-#include "slide.h"
+#include "slide.h"  // (through workspace.h) defines BSPF_SSE_MASKS where SSE2 is used
+
+// The stages' AVX paths where the masks have theirs (candidate_blocks.cpp).
+#if defined(BSPF_SSE_MASKS) && (defined(__GNUC__) || defined(__clang__)) && \
+    !defined(BSPF_NO_AVX_MASKS)
+#include <immintrin.h>
+#define BSPF_AVX_SWEEP 1
+#endif
 
 namespace bspf {
 
@@ -71,14 +78,163 @@ void earliestImpact(const Triangle& tri, const Vec3& pf, const Vec3& vf, Impact&
   if (faceImpact(triangle, path, best, penetrating) < best.time) edgeImpact(triangle, path, best);
 }
 
+bool sweepUsesAvx() {
+#ifdef BSPF_AVX_SWEEP
+  static const bool avx = availableMaskPaths().back() == MaskPath::Avx;
+  return avx;
+#else
+  return false;
+#endif
+}
+
 namespace {
 
-// faceImpact, inlined into the slide's scan, which runs it for every
-// candidate the masks keep: the call, and the saving and restoring of
-// registers around it, took about 15% of its instructions.
-[[gnu::always_inline]] inline double faceStage(const TriangleD& tri, const SpherePath& path,
-                                               Impact& best, bool& penetrating,
-                                               MeasuredDistance* measured) {
+#ifdef BSPF_AVX_SWEEP
+
+// The AVX paths of the two stages: a triangle's three edges in lanes 0 to 2
+// of one register (lane 3 repeats edge 0 and is never read). Each lane
+// takes the reference's operations in the reference's order (sums left to
+// right, no product fused into a sum: compiled for AVX alone, not FMA), so
+// every value is the reference's bit for bit; only the choices that follow,
+// made edge by edge in the reference's order, are scalar.
+
+// The ends of every edge relative to the start p: lane k holds corner k - p
+// and corner k + 1 - p, computed as the reference computes them.
+struct AvxEdgeEnds {
+  __m256d fromX, fromY, fromZ, toX, toY, toZ;
+};
+
+__attribute__((target("avx"))) inline AvxEdgeEnds edgeEndsAvx(const TriangleD& tri,
+                                                              const Eigen::Vector3d& p) {
+  const __m256d px = _mm256_set1_pd(p.x()), py = _mm256_set1_pd(p.y()), pz = _mm256_set1_pd(p.z());
+  return {_mm256_sub_pd(_mm256_loadu_pd(tri.cornerX), px),
+          _mm256_sub_pd(_mm256_loadu_pd(tri.cornerY), py),
+          _mm256_sub_pd(_mm256_loadu_pd(tri.cornerZ), pz),
+          _mm256_sub_pd(_mm256_loadu_pd(tri.cornerX + 1), px),
+          _mm256_sub_pd(_mm256_loadu_pd(tri.cornerY + 1), py),
+          _mm256_sub_pd(_mm256_loadu_pd(tri.cornerZ + 1), pz)};
+}
+
+// (x0 * y0 + x1 * y1) + x2 * y2, lane by lane.
+__attribute__((target("avx"))) inline __m256d dotAvx(__m256d x0, __m256d x1, __m256d x2, __m256d y0,
+                                                     __m256d y1, __m256d y2) {
+  return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x0, y0), _mm256_mul_pd(x1, y1)),
+                       _mm256_mul_pd(x2, y2));
+}
+
+// earliestRoot in each lane: the roots, and bit k of `found` set where lane
+// k's would return true (its comparisons are ordered: false with a NaN, as
+// the scalar ones are).
+__attribute__((target("avx"))) inline __m256d earliestRootsAvx(__m256d a, __m256d b, __m256d c,
+                                                               int& found) {
+  const __m256d zero = _mm256_setzero_pd();
+  __m256d missed = _mm256_or_pd(_mm256_cmp_pd(a, _mm256_set1_pd(1e-18), _CMP_LE_OQ),
+                                _mm256_cmp_pd(b, zero, _CMP_GE_OQ));
+  const __m256d discriminant =
+      _mm256_sub_pd(_mm256_mul_pd(b, b), _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(4), a), c));
+  missed = _mm256_or_pd(missed, _mm256_cmp_pd(discriminant, zero, _CMP_LT_OQ));
+  const __m256d negativeB = _mm256_xor_pd(b, _mm256_set1_pd(-0.0));
+  const __m256d root = _mm256_div_pd(_mm256_sub_pd(negativeB, _mm256_sqrt_pd(discriminant)),
+                                     _mm256_mul_pd(_mm256_set1_pd(2), a));
+  missed = _mm256_or_pd(missed, _mm256_or_pd(_mm256_cmp_pd(root, zero, _CMP_LT_OQ),
+                                             _mm256_cmp_pd(root, _mm256_set1_pd(1), _CMP_GT_OQ)));
+  found = ~_mm256_movemask_pd(missed) & 7;
+  return root;
+}
+
+// The face stage's edge test for all three edges: bit k set when edge k's
+// side value is not >= 0; `side` and `edgeSquared` receive every edge's.
+__attribute__((target("avx"))) int outsideEdgesAvx(const TriangleD& tri, const Eigen::Vector3d& p,
+                                                   const Eigen::Vector3d& touch, double (&side)[4],
+                                                   double (&edgeSquared)[4]) {
+  const AvxEdgeEnds ends = edgeEndsAvx(tri, p);
+  const __m256d ex = _mm256_sub_pd(ends.toX, ends.fromX), ey = _mm256_sub_pd(ends.toY, ends.fromY),
+                ez = _mm256_sub_pd(ends.toZ, ends.fromZ);
+  const __m256d rx = _mm256_sub_pd(_mm256_set1_pd(touch.x()), ends.fromX),
+                ry = _mm256_sub_pd(_mm256_set1_pd(touch.y()), ends.fromY),
+                rz = _mm256_sub_pd(_mm256_set1_pd(touch.z()), ends.fromZ);
+  const __m256d crossX = _mm256_sub_pd(_mm256_mul_pd(ey, rz), _mm256_mul_pd(ez, ry)),
+                crossY = _mm256_sub_pd(_mm256_mul_pd(ez, rx), _mm256_mul_pd(ex, rz)),
+                crossZ = _mm256_sub_pd(_mm256_mul_pd(ex, ry), _mm256_mul_pd(ey, rx));
+  const __m256d sides = dotAvx(_mm256_set1_pd(tri.normal.x()), _mm256_set1_pd(tri.normal.y()),
+                               _mm256_set1_pd(tri.normal.z()), crossX, crossY, crossZ);
+  const int outside =
+      _mm256_movemask_pd(_mm256_cmp_pd(sides, _mm256_setzero_pd(), _CMP_NGE_UQ)) & 7;
+  if (outside) {
+    _mm256_storeu_pd(side, sides);
+    _mm256_storeu_pd(edgeSquared, dotAvx(ex, ey, ez, ex, ey, ez));
+  }
+  return outside;
+}
+
+__attribute__((target("avx"))) void edgeImpactAvx(const TriangleD& tri, const SpherePath& path,
+                                                  Impact& best) {
+  using V = Eigen::Vector3d;
+  const V& v = path.move;
+  const AvxEdgeEnds ends = edgeEndsAvx(tri, path.start);
+  const __m256d vx = _mm256_set1_pd(v.x()), vy = _mm256_set1_pd(v.y()), vz = _mm256_set1_pd(v.z());
+  const __m256d one = _mm256_set1_pd(1), signBit = _mm256_set1_pd(-0.0);
+  // Edge k: the infinite cylinder of radius 1 around it.
+  const __m256d dx = _mm256_sub_pd(ends.toX, ends.fromX), dy = _mm256_sub_pd(ends.toY, ends.fromY),
+                dz = _mm256_sub_pd(ends.toZ, ends.fromZ);
+  const __m256d dd = dotAvx(dx, dy, dz, dx, dy, dz);
+  const __m256d startX = _mm256_xor_pd(ends.fromX, signBit),
+                startY = _mm256_xor_pd(ends.fromY, signBit),
+                startZ = _mm256_xor_pd(ends.fromZ, signBit);
+  const __m256d alongStart = _mm256_div_pd(dotAvx(startX, startY, startZ, dx, dy, dz), dd);
+  const __m256d wx = _mm256_sub_pd(startX, _mm256_mul_pd(alongStart, dx)),
+                wy = _mm256_sub_pd(startY, _mm256_mul_pd(alongStart, dy)),
+                wz = _mm256_sub_pd(startZ, _mm256_mul_pd(alongStart, dz));
+  const __m256d alongMove = _mm256_div_pd(dotAvx(vx, vy, vz, dx, dy, dz), dd);
+  const __m256d ux = _mm256_sub_pd(vx, _mm256_mul_pd(alongMove, dx)),
+                uy = _mm256_sub_pd(vy, _mm256_mul_pd(alongMove, dy)),
+                uz = _mm256_sub_pd(vz, _mm256_mul_pd(alongMove, dz));
+  int edgeFound;
+  const __m256d edgeRoots =
+      earliestRootsAvx(dotAvx(ux, uy, uz, ux, uy, uz),
+                       _mm256_mul_pd(_mm256_set1_pd(2), dotAvx(ux, uy, uz, wx, wy, wz)),
+                       _mm256_sub_pd(dotAvx(wx, wy, wz, wx, wy, wz), one), edgeFound);
+  // Corner k.
+  int cornerFound;
+  const __m256d cornerRoots = earliestRootsAvx(
+      _mm256_set1_pd(path.squaredLength),
+      _mm256_mul_pd(_mm256_set1_pd(-2), dotAvx(vx, vy, vz, ends.fromX, ends.fromY, ends.fromZ)),
+      _mm256_sub_pd(dotAvx(ends.fromX, ends.fromY, ends.fromZ, ends.fromX, ends.fromY, ends.fromZ),
+                    one),
+      cornerFound);
+  if ((edgeFound | cornerFound) == 0) return;  // the common case: nothing within the move
+  alignas(32) double edgeT[4], cornerT[4], fromX[4], fromY[4], fromZ[4], edgeX[4], edgeY[4],
+      edgeZ[4], squared[4];
+  _mm256_store_pd(edgeT, edgeRoots);
+  _mm256_store_pd(cornerT, cornerRoots);
+  _mm256_store_pd(fromX, ends.fromX), _mm256_store_pd(fromY, ends.fromY);
+  _mm256_store_pd(fromZ, ends.fromZ);
+  _mm256_store_pd(edgeX, dx), _mm256_store_pd(edgeY, dy), _mm256_store_pd(edgeZ, dz);
+  _mm256_store_pd(squared, dd);
+  // The reference's choices, edge k then corner k, in its order.
+  for (int k = 0; k < 3; ++k) {
+    const V e0(fromX[k], fromY[k], fromZ[k]);
+    if ((edgeFound >> k & 1) && edgeT[k] < best.time) {
+      const double t = edgeT[k];
+      const V d(edgeX[k], edgeY[k], edgeZ[k]);
+      const V centre = t * v;
+      const double along = (centre - e0).dot(d) / squared[k];
+      if (along >= 0 && along <= 1)
+        best = {float(t), (centre - (e0 + along * d)).normalized().cast<float>(), true};
+    }
+    if ((cornerFound >> k & 1) && cornerT[k] < best.time)
+      best = {float(cornerT[k]), (cornerT[k] * v - e0).normalized().cast<float>(), true};
+  }
+}
+
+#endif
+
+// faceImpact, on the AVX path or not, inlined into the slide's scan, which
+// runs it for every candidate the masks keep: the call, and the saving and
+// restoring of registers around it, took about 15% of its instructions.
+[[gnu::always_inline]] inline double faceStage(bool avx, const TriangleD& tri,
+                                               const SpherePath& path, Impact& best,
+                                               bool& penetrating, MeasuredDistance* measured) {
   using V = Eigen::Vector3d;
   constexpr double kSettled = std::numeric_limits<double>::infinity();
   const V& p = path.start;
@@ -120,8 +276,20 @@ namespace {
   const double t = (startSide - 1) / -approach;
   if (t > 1) return kSettled;
   if (t < best.time) {
-    const V corners[3] = {a, tri.b - p, tri.c - p};
     const V touch = t * v - n;
+#ifdef BSPF_AVX_SWEEP
+    if (avx) {
+      double side[4], edgeSquared[4];
+      if (const int outside = outsideEdgesAvx(tri, p, touch, side, edgeSquared)) {
+        const int k = std::countr_zero(unsigned(outside));  // the reference's first
+        return t +
+               clearanceTime(side[k] * side[k] / edgeSquared[k], tri.rise, -approach, path.length);
+      }
+      best = {float(t), n.cast<float>()};
+      return kSettled;
+    }
+#endif
+    const V corners[3] = {a, tri.b - p, tri.c - p};
     for (int k = 0; k < 3; ++k) {
       // n . (edge x (touch - corner)), written out as edgeImpact's are.
       const V& from = corners[k];
@@ -146,10 +314,15 @@ namespace {
 
 double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bool& penetrating,
                   MeasuredDistance* measured) {
-  return faceStage(tri, path, best, penetrating, measured);
+  return faceStage(sweepUsesAvx(), tri, path, best, penetrating, measured);
 }
 
-void edgeImpact(const TriangleD& tri, const SpherePath& path, Impact& best) {
+double scalarFaceImpact(const TriangleD& tri, const SpherePath& path, Impact& best,
+                        bool& penetrating, MeasuredDistance* measured) {
+  return faceStage(false, tri, path, best, penetrating, measured);
+}
+
+void scalarEdgeImpact(const TriangleD& tri, const SpherePath& path, Impact& best) {
   using V = Eigen::Vector3d;
   const V& p = path.start;
   const V& v = path.move;
@@ -188,6 +361,22 @@ void edgeImpact(const TriangleD& tri, const SpherePath& path, Impact& best) {
   }
 }
 
+namespace {
+
+// edgeImpact, on the AVX path or not.
+void edgeStage(bool avx, const TriangleD& tri, const SpherePath& path, Impact& best) {
+#ifdef BSPF_AVX_SWEEP
+  if (avx) return edgeImpactAvx(tri, path, best);
+#endif
+  scalarEdgeImpact(tri, path, best);
+}
+
+}  // namespace
+
+void edgeImpact(const TriangleD& tri, const SpherePath& path, Impact& best) {
+  edgeStage(sweepUsesAvx(), tri, path, best);
+}
+
 Triangle sphereSpaceTriangle(const World& world, std::uint32_t t, const Vec3& toSphere) {
   const schema::Triangle& tri = world.triangles()[t];
   Triangle out;
@@ -210,7 +399,6 @@ FaceTest exactFaceTest(const World& world, std::uint32_t triangle, EllipsoidRadi
 
 namespace {
 
-using detail::edgeImpact;
 using detail::Impact;
 using detail::sphereSpaceTriangle;
 using detail::Triangle;
@@ -316,6 +504,7 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
   });
   std::vector<std::pair<double, std::uint32_t>>& open = workspace.open;
   const detail::ExactMaskFunction exactMask = detail::exactMaskFunction();
+  const bool avx = detail::sweepUsesAvx();
   for (int iteration = 0;; ++iteration) {
     if (move.squaredNorm() < 1e-14f) break;
     const Vec3 from = p.cwiseQuotient(toSphere);
@@ -339,7 +528,7 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
         const float before = impact.time;  // every new impact is earlier
         detail::ExactCold& cold = local.made(slot);
         const double earliest =
-            detail::faceStage(cold.sphere, path, impact, penetrating, &cold.measured);
+            detail::faceStage(avx, cold.sphere, path, impact, penetrating, &cold.measured);
         if (impact.time != before) impactSlot = slot;
         if (earliest < 1) open.push_back({earliest, slot});
       }
@@ -347,7 +536,7 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     for (const auto& [earliest, slot] : open)
       if (earliest < impact.time) {
         const float before = impact.time;
-        edgeImpact(local.made(slot).sphere, path, impact);
+        detail::edgeStage(avx, local.made(slot).sphere, path, impact);
         if (impact.time != before) impactSlot = slot;
       }
     // A start in penetration (pushed there by another body, or placed there)

@@ -71,6 +71,10 @@ struct TriangleD {
   /// along `normal` is wound the other way, which only a degenerate
   /// triangle's rounded normal can do.
   double rise = 0;
+  /// The corners again, a coordinate at a time: a, b, c, a, b. Edge k runs
+  /// from element k to element k + 1, so the stages' AVX paths load all
+  /// three edges' ends with two loads a coordinate.
+  double cornerX[5], cornerY[5], cornerZ[5];
   explicit TriangleD(const Triangle& t)
       : a(t.a.cast<double>()),
         b(t.b.cast<double>()),
@@ -78,7 +82,10 @@ struct TriangleD {
         normal(t.normal.cast<double>()),
         rise(normal.dot((b - a).cross(c - a)) > 0
                  ? std::max({0.0, normal.dot(b - a), normal.dot(c - a)})
-                 : std::numeric_limits<double>::infinity()) {}
+                 : std::numeric_limits<double>::infinity()),
+        cornerX{a.x(), b.x(), c.x(), a.x(), b.x()},
+        cornerY{a.y(), b.y(), c.y(), a.y(), b.y()},
+        cornerZ{a.z(), b.z(), c.z(), a.z(), b.z()} {}
   TriangleD() = default;
 };
 
@@ -121,6 +128,17 @@ double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bo
 
 // earliestImpact's second stage: the edges and corners.
 void edgeImpact(const TriangleD& tri, const SpherePath& path, Impact& best);
+
+/// Whether faceImpact and edgeImpact take their AVX paths on this CPU: the
+/// three edges of a triangle in the lanes of one register (where the masks
+/// use AVX too, availableMaskPaths). Their operations are the reference's,
+/// lane by lane and in the same order, so they give the same results bit
+/// for bit (the tests compare them).
+bool sweepUsesAvx();
+/// faceImpact and edgeImpact a coordinate at a time: the references.
+double scalarFaceImpact(const TriangleD& tri, const SpherePath& path, Impact& best,
+                        bool& penetrating, MeasuredDistance* measured = nullptr);
+void scalarEdgeImpact(const TriangleD& tri, const SpherePath& path, Impact& best);
 
 /// Triangle `t` of `world` scaled by `toSphere` into sphere space, with its
 /// unit normal.

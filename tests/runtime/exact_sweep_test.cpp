@@ -3,9 +3,13 @@
 // exact_sweep.cpp): the time the face stage returns for a triangle it
 // leaves open is one before which the edge stage finds nothing, so the
 // slide may skip the edge stage of a triangle whose time is not before the
-// earliest impact found so far.
+// earliest impact found so far; and the stages' AVX paths give their
+// references' results bit for bit.
+#include <bit>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <random>
 
@@ -155,4 +159,79 @@ TEST_CASE(
   CHECK(settledByMeasure > 20000);
   CHECK(measured > 20000);
   CHECK(open > 500);
+}
+
+namespace {
+
+// Whether two impacts are the same bit for bit (time, normal and kind).
+bool sameImpact(const Impact& x, const Impact& y) {
+  return std::bit_cast<std::uint32_t>(x.time) == std::bit_cast<std::uint32_t>(y.time) &&
+         std::memcmp(x.normal.data(), y.normal.data(), sizeof(float) * 3) == 0 && x.edge == y.edge;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "the face and edge stages' AVX paths give the reference's times and impacts bit for bit, on "
+    "random triangles and paths that pass close to their edges",
+    "[runtime][exact-sweep]") {
+  if (!bspf::detail::sweepUsesAvx()) {
+    WARN("this CPU has no AVX: the stages run their references only");
+    return;
+  }
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int faceHits = 0, faceOpen = 0, edgeHits = 0, cornerHits = 0;
+  for (int round = 0; round < 300000; ++round) {
+    const float size = round % 4 == 0 ? 200.0f : float(0.05 + 10 * unit(rng));
+    const float thinness = round % 3 == 0 ? float(1 - std::pow(10.0, -1 - 5 * unit(rng))) : 0.0f;
+    const Triangle tri = randomTriangle(rng, size, thinness);
+    const TriangleD triangle(tri);
+    // A point of the plane near edge k (inside or outside it, often by
+    // very little, where the side values' signs turn), the start up to 2
+    // in front of it (or just behind), the move towards and along the plane.
+    const Eigen::Vector3d corners[3] = {triangle.a, triangle.b, triangle.c};
+    const int k = int(rng() % 3);
+    const Eigen::Vector3d& from = corners[k];
+    const Eigen::Vector3d& to = corners[(k + 1) % 3];
+    const Eigen::Vector3d n = triangle.normal.normalized();
+    const Eigen::Vector3d outward = (to - from).cross(n).normalized();
+    const double beyond = (unit(rng) < 0.5 ? -1 : 1) * 1.5 * std::pow(unit(rng), 4);
+    const Eigen::Vector3d near = from + (to - from) * (-0.2 + 1.4 * unit(rng)) + outward * beyond;
+    const Eigen::Vector3d start = near + n * (-0.05 + 2 * unit(rng));
+    const Eigen::Vector3d wander(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5);
+    const Eigen::Vector3d move = (-n * unit(rng) + wander) * (2 * std::pow(unit(rng), 2));
+    const SpherePath path(start.cast<float>(), move.cast<float>());
+    // Against no earlier impact, or one at a random time.
+    Impact prior;
+    if (round % 3 == 0) prior = {float(unit(rng)), Vec3::UnitY()};
+
+    Impact face = prior, faceReference = prior;
+    bool penetrating = false, penetratingReference = false;
+    const double bound = bspf::detail::faceImpact(triangle, path, face, penetrating);
+    const double boundReference =
+        bspf::detail::scalarFaceImpact(triangle, path, faceReference, penetratingReference);
+    INFO("round " << round);
+    REQUIRE(std::bit_cast<std::uint64_t>(bound) == std::bit_cast<std::uint64_t>(boundReference));
+    REQUIRE(sameImpact(face, faceReference));
+    REQUIRE(penetrating == penetratingReference);
+    if (face.time < prior.time) ++faceHits;
+    if (bound < 1) ++faceOpen;
+
+    Impact edge = prior, edgeReference = prior;
+    bspf::detail::edgeImpact(triangle, path, edge);
+    bspf::detail::scalarEdgeImpact(triangle, path, edgeReference);
+    REQUIRE(sameImpact(edge, edgeReference));
+    if (edge.time < prior.time) {
+      // An edge's or a corner's normal is perpendicular to the edges of
+      // the corner (when it is met there): counted apart, roughly.
+      const Eigen::Vector3d normal = edge.normal.cast<double>();
+      ++(std::abs(normal.dot((to - from).normalized())) < 1e-3 ? edgeHits : cornerHits);
+    }
+  }
+  // The rounds must reach every outcome of both stages.
+  CHECK(faceHits > 20000);
+  CHECK(faceOpen > 20000);
+  CHECK(edgeHits > 20000);
+  CHECK(cornerHits > 5000);
 }
