@@ -232,7 +232,7 @@ __attribute__((target("avx"))) void edgeImpactAvx(const TriangleD& tri, const Sp
 // faceImpact, on the AVX path or not, inlined into the slide's scan, which
 // runs it for every candidate the masks keep: the call, and the saving and
 // restoring of registers around it, took about 15% of its instructions.
-[[gnu::always_inline]] inline double faceStage(bool avx, const TriangleD& tri,
+[[gnu::always_inline]] inline double faceStage([[maybe_unused]] bool avx, const TriangleD& tri,
                                                const SpherePath& path, Impact& best,
                                                bool& penetrating, MeasuredDistance* measured) {
   using V = Eigen::Vector3d;
@@ -364,7 +364,8 @@ void scalarEdgeImpact(const TriangleD& tri, const SpherePath& path, Impact& best
 namespace {
 
 // edgeImpact, on the AVX path or not.
-void edgeStage(bool avx, const TriangleD& tri, const SpherePath& path, Impact& best) {
+void edgeStage([[maybe_unused]] bool avx, const TriangleD& tri, const SpherePath& path,
+               Impact& best) {
 #ifdef BSPF_AVX_SWEEP
   if (avx) return edgeImpactAvx(tri, path, best);
 #endif
