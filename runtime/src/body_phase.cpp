@@ -416,7 +416,7 @@ void BodyGrid::build(std::span<const Body> bodies) {
     buildsUntilSortingAgain_ = 0;
     entries_.resize(n);
     for (std::size_t i = 0; i < n; ++i) entries_[i] = {endOf(i), bodies[i].radii, std::uint32_t(i)};
-    sortedNeighbours_ = findNeighboursBySorting(width);
+    sortedNeighbours_ = findNeighboursBySorting(width, height);
     if (sortedNeighbours_) return;
     buildsUntilSortingAgain_ = kBuildsBeforeSortingAgain;
   }
@@ -496,30 +496,34 @@ struct GridCell {
 
 }  // namespace
 
-bool BodyGrid::findNeighboursBySorting(float width) {
+bool BodyGrid::findNeighboursBySorting(float width, float height) {
   const std::uint32_t n = std::uint32_t(entries_.size());
   if (xOrder_.size() != n) {
     xOrder_.resize(n);
-    for (std::uint32_t i = 0; i < n; ++i) xOrder_[i] = i;
+    for (std::uint32_t i = 0; i < n; ++i) xOrder_[i] = {0, 0, 0, i};
   }
-  for (std::uint64_t& key : xOrder_) {
-    const std::uint32_t i = std::uint32_t(key);
-    const Entry& e = entries_[i];
+  // Each centre beside its index, in the last order: the scan below reads
+  // them in a row, where going through the index to the entry took two
+  // dependent loads a pair.
+  for (XPlace& place : xOrder_) {
+    const Entry& e = entries_[place.body];
     // The scan below needs x in order and every pair's reach at most half a
-    // cell (the width's std::max passed over a NaN radius).
-    if (!(std::abs(e.position.x()) <= std::numeric_limits<float>::max()) || std::isnan(e.radii.xz))
+    // cell (the cell's std::max passed over a NaN radius).
+    if (!(std::abs(e.position.x()) <= std::numeric_limits<float>::max()) ||
+        std::isnan(e.radii.xz) || std::isnan(e.radii.y))
       return false;
-    // A float's bits, sign-flipped, order as the float does.
-    const std::uint32_t bits = std::bit_cast<std::uint32_t>(e.position.x());
-    key = std::uint64_t(bits >> 31 ? ~bits : bits | 0x80000000u) << 32 | i;
+    place.x = e.position.x(), place.y = e.position.y(), place.z = e.position.z();
   }
   // Insertion sort: the bodies moved a little since the last build, so the
   // last order is nearly this one (a few swaps, not a sort's n log n).
+  auto before = [](const XPlace& a, const XPlace& b) {
+    return a.x < b.x || (a.x == b.x && a.body < b.body);
+  };
   for (std::uint32_t k = 1; k < n; ++k) {
-    const std::uint64_t key = xOrder_[k];
+    const XPlace place = xOrder_[k];
     std::uint32_t at = k;
-    for (; at > 0 && xOrder_[at - 1] > key; --at) xOrder_[at] = xOrder_[at - 1];
-    xOrder_[at] = key;
+    for (; at > 0 && before(place, xOrder_[at - 1]); --at) xOrder_[at] = xOrder_[at - 1];
+    xOrder_[at] = place;
   }
   // The grid examines at most kMaxBodyCandidates bodies of a body's 8 cells,
   // in an order of its own: with more there, which pushers it finds depends
@@ -528,13 +532,11 @@ bool BodyGrid::findNeighboursBySorting(float width) {
   // 34 bodies (it and 33 others) would lie within 4 cells of each other
   // along x, consecutive in x order.
   constexpr std::uint32_t kRun = kMaxBodyCandidates + 2;
-  if (n >= kRun) {
-    auto scaled = [&](std::uint64_t key) {
-      return clampToCells(entries_[std::uint32_t(key)].position.x() * inverseWidth_);
-    };
-    for (std::uint32_t k = 0; k + kRun <= n; ++k)
-      if (!(scaled(xOrder_[k + kRun - 1]) - scaled(xOrder_[k]) > 4)) return false;
-  }
+  for (std::uint32_t k = 0; k + kRun <= n; ++k)
+    if (!(clampToCells(xOrder_[k + kRun - 1].x * inverseWidth_) -
+              clampToCells(xOrder_[k].x * inverseWidth_) >
+          4))
+      return false;
 
   // Each pair less than half a cell apart along x (no pair reaches further:
   // cells are twice the widest body), kept, each way, when its boxes overlap
@@ -575,14 +577,20 @@ bool BodyGrid::findNeighboursBySorting(float width) {
     nearLinks_.push_back({other, nearHead_[self]});
     nearHead_[self] = std::uint32_t(nearLinks_.size() - 1);
   };
-  const float reach = 0.5f * width;
+  // Half a cell is twice the largest radius (exactly: the cell's size is 4
+  // of them), so it is at least any pair's summed radii (the sum of two
+  // floats no larger rounds to no more): a pair as far apart along z or y
+  // fails the box test below, which most pairs in reach along x do. Tested
+  // first, on the centres in a row.
+  const float reach = 0.5f * width, reachY = 0.5f * height;
   for (std::uint32_t k = 0; k < n; ++k) {
-    const std::uint32_t a = std::uint32_t(xOrder_[k]);
-    const Entry& p = entries_[a];
-    for (std::uint32_t l = k + 1; l < n; ++l) {
-      const std::uint32_t b = std::uint32_t(xOrder_[l]);
+    const XPlace& self = xOrder_[k];
+    const Entry& p = entries_[self.body];
+    for (std::uint32_t l = k + 1; l < n && xOrder_[l].x - self.x < reach; ++l) {
+      const XPlace& other = xOrder_[l];
+      if (std::abs(self.z - other.z) >= reach || std::abs(self.y - other.y) >= reachY) continue;
+      const std::uint32_t a = self.body, b = other.body;
       const Entry& q = entries_[b];
-      if (!(q.position.x() - p.position.x() < reach)) break;
       const float ax = p.position.x() - q.position.x(), ay = p.position.y() - q.position.y(),
                   az = p.position.z() - q.position.z();
       const float reachXZ = p.radii.xz + q.radii.xz;

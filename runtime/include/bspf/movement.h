@@ -465,9 +465,9 @@ class BodyGrid {
   /// index: fills nearHead_ and nearLinks_ by sorting the centres along x,
   /// or returns false when the grid must find the pairs instead (a coordinate
   /// or radius that is not finite, or a body with more than
-  /// kMaxBodyCandidates others near enough to be in its cells). `width`: the
-  /// cells' width, metres.
-  bool findNeighboursBySorting(float width);
+  /// kMaxBodyCandidates others near enough to be in its cells). `width`,
+  /// `height`: the cells' size, metres.
+  bool findNeighboursBySorting(float width, float height);
 
   static constexpr std::uint64_t kFree = ~std::uint64_t(0);
   /// The table slot of `key` when a body is in that cell, else of a free slot.
@@ -503,9 +503,14 @@ class BodyGrid {
   /// sorted again (the grid's work meanwhile: the same pairs).
   int buildsUntilSortingAgain_ = 0;
   static constexpr int kBuildsBeforeSortingAgain = 30;
-  /// The centres' x (ordered bits) << 32 | body, sorted; kept from the last
+  /// A body's centre, for the sorting.
+  struct XPlace {
+    float x, y, z;
+    std::uint32_t body;
+  };
+  /// The centres in x order (ties: lower index first); kept from the last
   /// build, whose order is nearly this build's.
-  std::vector<std::uint64_t> xOrder_;
+  std::vector<XPlace> xOrder_;
   /// The bodies the grid would examine for a body and whose boxes overlap
   /// its own: a list a body, in nearLinks_ from nearHead_[body] on (the
   /// order does not matter: NearestPushers keeps the nearest whatever the
