@@ -498,20 +498,24 @@ struct GridCell {
 
 bool BodyGrid::findNeighboursBySorting(float width, float height) {
   const std::uint32_t n = std::uint32_t(entries_.size());
-  if (xOrder_.size() != n) {
-    xOrder_.resize(n);
+  // The bodies, then a place at x +infinity that ends every scan below
+  // (beyond any reach: no bound to test).
+  if (xOrder_.size() != n + 1) {
+    xOrder_.resize(n + 1);
     for (std::uint32_t i = 0; i < n; ++i) xOrder_[i] = {0, 0, 0, i};
+    xOrder_[n] = {std::numeric_limits<float>::infinity(), 0, 0, kNoNeighbour};
   }
   // Each centre beside its index, in the last order: the scan below reads
   // them in a row, where going through the index to the entry took two
   // dependent loads a pair.
-  for (XPlace& place : xOrder_) {
+  for (std::uint32_t k = 0; k < n; ++k) {
+    XPlace& place = xOrder_[k];
     const Entry& e = entries_[place.body];
     // The scan below needs x in order and every pair's reach at most half a
-    // cell (the cell's std::max passed over a NaN radius).
-    if (!(std::abs(e.position.x()) <= std::numeric_limits<float>::max()) ||
-        std::isnan(e.radii.xz) || std::isnan(e.radii.y))
-      return false;
+    // cell (the cell's std::max passed over a NaN radius). One test: x - x
+    // is NaN when x is not finite, the sum when a radius is NaN (or, turned
+    // back needlessly, when the radii are infinities of both signs).
+    if (std::isnan((e.position.x() - e.position.x()) + (e.radii.xz + e.radii.y))) return false;
     place.x = e.position.x(), place.y = e.position.y(), place.z = e.position.z();
   }
   // Insertion sort: the bodies moved a little since the last build, so the
@@ -583,14 +587,11 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   // fails the box test below, which most pairs in reach along x do. Tested
   // first, on the centres in a row.
   const float reach = 0.5f * width, reachY = 0.5f * height;
-  for (std::uint32_t k = 0; k < n; ++k) {
-    const XPlace& self = xOrder_[k];
-    const Entry& p = entries_[self.body];
-    for (std::uint32_t l = k + 1; l < n && xOrder_[l].x - self.x < reach; ++l) {
-      const XPlace& other = xOrder_[l];
-      if (std::abs(self.z - other.z) >= reach || std::abs(self.y - other.y) >= reachY) continue;
-      const std::uint32_t a = self.body, b = other.body;
-      const Entry& q = entries_[b];
+  for (const XPlace* self = xOrder_.data(); self != xOrder_.data() + n; ++self) {
+    for (const XPlace* other = self + 1; other->x - self->x < reach; ++other) {
+      if (std::abs(self->z - other->z) >= reach || std::abs(self->y - other->y) >= reachY) continue;
+      const std::uint32_t a = self->body, b = other->body;
+      const Entry &p = entries_[a], &q = entries_[b];
       const float ax = p.position.x() - q.position.x(), ay = p.position.y() - q.position.y(),
                   az = p.position.z() - q.position.z();
       const float reachXZ = p.radii.xz + q.radii.xz;

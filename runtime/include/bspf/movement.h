@@ -508,8 +508,9 @@ class BodyGrid {
     float x, y, z;
     std::uint32_t body;
   };
-  /// The centres in x order (ties: lower index first); kept from the last
-  /// build, whose order is nearly this build's.
+  /// The centres in x order (ties: lower index first), then one at x
+  /// +infinity; kept from the last build, whose order is nearly this
+  /// build's.
   std::vector<XPlace> xOrder_;
   /// The bodies the grid would examine for a body and whose boxes overlap
   /// its own: a list a body, in nearLinks_ from nearHead_[body] on (the
