@@ -494,8 +494,9 @@ class BodyGrid {
   std::vector<Mover> movers_;
   std::vector<std::pair<std::uint64_t, std::uint32_t>> sweepCells_;  ///< (cell key, fast body)
   std::vector<std::uint64_t> sweepPairs_;                            ///< a << 32 | b, a < b
-  std::vector<std::uint64_t> sweepOrder_;  ///< low x's ordered bits << 32 | body, sorted
-  std::vector<std::uint32_t> oversize_;    ///< fast bodies of more than kMaxSweepPieces pieces
+  /// Low x's ordered bits << 32 | body, sorted; kept for the next sweep.
+  std::vector<std::uint64_t> sweepOrder_;
+  std::vector<std::uint32_t> oversize_;  ///< fast bodies of more than kMaxSweepPieces pieces
   /// The last build found the pairs by sorting (findNeighboursBySorting):
   /// entries_ are by body index, places_ and the cells unused.
   bool sortedNeighbours_ = false;
