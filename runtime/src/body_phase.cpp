@@ -726,7 +726,10 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
     if (grid.sortedNeighbours_ && grid.nearHead_[i] == BodyGrid::kNoNeighbour) continue;
     NearestPushers nearest;
     int examined = 0;
-    auto examine = [&](const BodyGrid::Entry& other) {
+    // `boxesOverlap`: the pair is known to pass the box test below (the
+    // sorting kept only such pairs, testing the same differences, each the
+    // negation of this one's, and the same sums).
+    auto examine = [&](const BodyGrid::Entry& other, bool boxesOverlap) {
       ++examined;
       // From the other towards this body, in scalars: a pile examines
       // kMaxBodyCandidates a body, and Eigen's expressions cost twice this.
@@ -736,8 +739,8 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
       // Overlapping ellipsoids overlap in their bounding boxes too: most
       // candidates of a walking crowd end here, before any square root.
       const float reachXZ = self.radii.xz + other.radii.xz;
-      if (std::abs(ax) >= reachXZ || std::abs(az) >= reachXZ ||
-          std::abs(ay) >= self.radii.y + other.radii.y)
+      if (!boxesOverlap && (std::abs(ax) >= reachXZ || std::abs(az) >= reachXZ ||
+                            std::abs(ay) >= self.radii.y + other.radii.y))
         return;
       const float distance = std::sqrt(ax * ax + (ay * ay + az * az));  // as Eigen does
       const bool apartKnown = distance > 1e-6f;
@@ -758,7 +761,7 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
       // same nearest pushers.
       for (std::uint32_t link = grid.nearHead_[i]; link != BodyGrid::kNoNeighbour;
            link = grid.nearLinks_[link].next)
-        examine(grid.entries_[grid.nearLinks_[link].body]);
+        examine(grid.entries_[grid.nearLinks_[link].body], true);
     } else {
       // Its own cell first, outwards from its own place (a cell's bodies sit
       // in index order): in a pile larger than the candidate cap, each body
@@ -769,8 +772,9 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
         const bool below = place.entry >= own.first + step,
                    above = place.entry + step < own.first + own.count;
         if (!below && !above) break;
-        if (below) examine(grid.entries_[place.entry - step]);
-        if (above && examined < kMaxBodyCandidates) examine(grid.entries_[place.entry + step]);
+        if (below) examine(grid.entries_[place.entry - step], false);
+        if (above && examined < kMaxBodyCandidates)
+          examine(grid.entries_[place.entry + step], false);
       }
       // Then the 7 other cells that may hold an overlapping body. Most are
       // empty: their occupancy bits, when kept, spare those a hash look-up.
@@ -790,7 +794,7 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
             grid.cells_[grid.find(place.key + kNeighbourOffsets[place.upperHalf][k])];
         for (std::uint32_t e = cell.first, end = cell.first + cell.count;
              e < end && examined < kMaxBodyCandidates; ++e)
-          examine(grid.entries_[e]);
+          examine(grid.entries_[e], false);
       }
     }
 
