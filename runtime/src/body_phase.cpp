@@ -51,6 +51,26 @@ struct Pusher {
   float overlap;
 };
 
+// The distance between two bodies' centres `apart` (one's minus the
+// other's) apart, as a push measures it, and whether it gives a direction.
+float centreDistance(float ax, float ay, float az) {
+  return std::sqrt(ax * ax + (ay * ay + az * az));  // as Eigen does
+}
+bool apartKnown(float distance) { return distance > 1e-6f; }
+
+// How far two bodies with `selfRadii` and `otherRadii` overlap along the
+// line between their centres, `apart` (ax, ay, az) and `distance` apart
+// (centreDistance). The same value for the pair either way round: the
+// direction's components change sign only, effectiveRadius squares them,
+// and the two extents' sum commutes.
+float pairOverlap(float ax, float ay, float az, float distance, EllipsoidRadii selfRadii,
+                  EllipsoidRadii otherRadii) {
+  // At one point they part horizontally (tieBreakDirection).
+  if (!apartKnown(distance)) return selfRadii.xz + otherRadii.xz;
+  const Vec3 direction(ax / distance, ay / distance, az / distance);
+  return effectiveRadius(direction, selfRadii) + effectiveRadius(direction, otherRadii) - distance;
+}
+
 // Keeps the kMaxBodyPushes nearest pushers, nearest first (ties: lower
 // index). A pile offers up to kMaxBodyCandidates of them per body, so the
 // order lives in 64-bit keys (the distance's bits above the body index: a
@@ -589,8 +609,8 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   };
   nearHead_.assign(n, kNoNeighbour);
   nearLinks_.clear();
-  auto link = [&](std::uint32_t self, std::uint32_t other) {
-    nearLinks_.push_back({other, nearHead_[self]});
+  auto link = [&](std::uint32_t self, std::uint32_t other, float distance, float overlap) {
+    nearLinks_.push_back({other, nearHead_[self], distance, overlap});
     nearHead_[self] = std::uint32_t(nearLinks_.size() - 1);
   };
   // Half a cell is twice the largest radius (exactly: the cell's size is 4
@@ -610,14 +630,18 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
       if (std::abs(ax) >= reachXZ || std::abs(az) >= reachXZ ||
           std::abs(ay) >= p.radii.y + q.radii.y)
         continue;
+      // Measured here once for the pair's two pushes (each body's push
+      // measured it again, with the same result).
+      const float distance = centreDistance(ax, ay, az);
+      const float overlap = pairOverlap(ax, ay, az, distance, p.radii, q.radii);
       if (withinHalfCell(p.position, q.position)) {
-        link(a, b);
-        link(b, a);
+        link(a, b, distance, overlap);
+        link(b, a, distance, overlap);
         continue;
       }
       const GridCell cellA = cellOf(p.position), cellB = cellOf(q.position);
-      if (examines(cellA, cellB)) link(a, b);
-      if (examines(cellB, cellA)) link(b, a);
+      if (examines(cellA, cellB)) link(a, b, distance, overlap);
+      if (examines(cellB, cellA)) link(b, a, distance, overlap);
     }
   }
   return true;
@@ -726,10 +750,7 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
     if (grid.sortedNeighbours_ && grid.nearHead_[i] == BodyGrid::kNoNeighbour) continue;
     NearestPushers nearest;
     int examined = 0;
-    // `boxesOverlap`: the pair is known to pass the box test below (the
-    // sorting kept only such pairs, testing the same differences, each the
-    // negation of this one's, and the same sums).
-    auto examine = [&](const BodyGrid::Entry& other, bool boxesOverlap) {
+    auto examine = [&](const BodyGrid::Entry& other) {
       ++examined;
       // From the other towards this body, in scalars: a pile examines
       // kMaxBodyCandidates a body, and Eigen's expressions cost twice this.
@@ -739,29 +760,34 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
       // Overlapping ellipsoids overlap in their bounding boxes too: most
       // candidates of a walking crowd end here, before any square root.
       const float reachXZ = self.radii.xz + other.radii.xz;
-      if (!boxesOverlap && (std::abs(ax) >= reachXZ || std::abs(az) >= reachXZ ||
-                            std::abs(ay) >= self.radii.y + other.radii.y))
+      if (std::abs(ax) >= reachXZ || std::abs(az) >= reachXZ ||
+          std::abs(ay) >= self.radii.y + other.radii.y)
         return;
-      const float distance = std::sqrt(ax * ax + (ay * ay + az * az));  // as Eigen does
-      const bool apartKnown = distance > 1e-6f;
-      if (!nearest.wants(apartKnown ? distance : 0, other.body)) return;
-      // At one point they part horizontally (tieBreakDirection).
-      float overlap = reachXZ;
-      if (apartKnown) {
-        const Vec3 direction(ax / distance, ay / distance, az / distance);
-        overlap = effectiveRadius(direction, self.radii) + effectiveRadius(direction, other.radii) -
-                  distance;
-      }
-      if (overlap > 0) nearest.offer({other.body, apartKnown, Vec3(ax, ay, az), overlap});
+      const float distance = centreDistance(ax, ay, az);
+      const bool known = apartKnown(distance);
+      if (!nearest.wants(known ? distance : 0, other.body)) return;
+      const float overlap = pairOverlap(ax, ay, az, distance, self.radii, other.radii);
+      if (overlap > 0) nearest.offer({other.body, known, Vec3(ax, ay, az), overlap});
     };
 
     if (grid.sortedNeighbours_) {
       // The grid's candidates whose boxes overlap, found by sorting: no more
       // than kMaxBodyCandidates, so examined in any order they give the
       // same nearest pushers.
+      // Each pair's distance and overlap were measured once, for both
+      // bodies, as examine() measures them.
       for (std::uint32_t link = grid.nearHead_[i]; link != BodyGrid::kNoNeighbour;
-           link = grid.nearLinks_[link].next)
-        examine(grid.entries_[grid.nearLinks_[link].body], true);
+           link = grid.nearLinks_[link].next) {
+        const BodyGrid::NearLink& near = grid.nearLinks_[link];
+        const bool known = apartKnown(near.distance);
+        if (!nearest.wants(known ? near.distance : 0, near.body)) continue;
+        const Vec3& other = grid.entries_[near.body].position;
+        if (near.overlap > 0)
+          nearest.offer({near.body, known,
+                         Vec3(self.position.x() - other.x(), self.position.y() - other.y(),
+                              self.position.z() - other.z()),
+                         near.overlap});
+      }
     } else {
       // Its own cell first, outwards from its own place (a cell's bodies sit
       // in index order): in a pile larger than the candidate cap, each body
@@ -772,9 +798,8 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
         const bool below = place.entry >= own.first + step,
                    above = place.entry + step < own.first + own.count;
         if (!below && !above) break;
-        if (below) examine(grid.entries_[place.entry - step], false);
-        if (above && examined < kMaxBodyCandidates)
-          examine(grid.entries_[place.entry + step], false);
+        if (below) examine(grid.entries_[place.entry - step]);
+        if (above && examined < kMaxBodyCandidates) examine(grid.entries_[place.entry + step]);
       }
       // Then the 7 other cells that may hold an overlapping body. Most are
       // empty: their occupancy bits, when kept, spare those a hash look-up.
@@ -794,7 +819,7 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
             grid.cells_[grid.find(place.key + kNeighbourOffsets[place.upperHalf][k])];
         for (std::uint32_t e = cell.first, end = cell.first + cell.count;
              e < end && examined < kMaxBodyCandidates; ++e)
-          examine(grid.entries_[e], false);
+          examine(grid.entries_[e]);
       }
     }
 

@@ -520,6 +520,8 @@ class BodyGrid {
   struct NearLink {
     std::uint32_t body;
     std::uint32_t next;  ///< in nearLinks_; kNoNeighbour ends the list
+    float distance;      ///< between the centres, as the push measures it
+    float overlap;       ///< along the line between them, likewise
   };
   static constexpr std::uint32_t kNoNeighbour = ~std::uint32_t(0);
   std::vector<std::uint32_t> nearHead_;
