@@ -537,11 +537,16 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
     for (std::uint32_t i = 0; i < n; ++i) xOrder_[i] = {0, 0, 0, i};
     xOrder_[n] = {std::numeric_limits<float>::infinity(), 0, 0, kNoNeighbour};
   }
-  // Each centre beside its index, in the last order: the scan below reads
-  // them in a row, where going through the index to the entry took two
-  // dependent loads a pair.
+  // Each centre beside its index (the scan below reads them in a row, where
+  // going through the index to the entry took two dependent loads a pair),
+  // taken in the last order and insertion-sorted in the same pass: the
+  // bodies moved a little since the last build, so the last order is nearly
+  // this one (a few swaps, not a sort's n log n).
+  auto before = [](const XPlace& a, const XPlace& b) {
+    return a.x < b.x || (a.x == b.x && a.body < b.body);
+  };
   for (std::uint32_t k = 0; k < n; ++k) {
-    XPlace& place = xOrder_[k];
+    XPlace place = xOrder_[k];
     const Entry& e = entries_[place.body];
     // The scan below needs x in order and every pair's reach at most half a
     // cell (the cell's std::max passed over a NaN radius). One test: x - x
@@ -549,14 +554,6 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
     // back needlessly, when the radii are infinities of both signs).
     if (std::isnan((e.position.x() - e.position.x()) + (e.radii.xz + e.radii.y))) return false;
     place.x = e.position.x(), place.y = e.position.y(), place.z = e.position.z();
-  }
-  // Insertion sort: the bodies moved a little since the last build, so the
-  // last order is nearly this one (a few swaps, not a sort's n log n).
-  auto before = [](const XPlace& a, const XPlace& b) {
-    return a.x < b.x || (a.x == b.x && a.body < b.body);
-  };
-  for (std::uint32_t k = 1; k < n; ++k) {
-    const XPlace place = xOrder_[k];
     std::uint32_t at = k;
     for (; at > 0 && before(place, xOrder_[at - 1]); --at) xOrder_[at] = xOrder_[at - 1];
     xOrder_[at] = place;
