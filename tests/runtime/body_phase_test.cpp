@@ -701,3 +701,35 @@ TEST_CASE("a small pile with more candidates than the cap is pushed as the grid'
   const int contacts = requireSameAsWithFarBody(pile, 30);
   REQUIRE(contacts > 64 * bspf::kMaxBodyPushes);  // the first frame alone pushes every body
 }
+
+TEST_CASE(
+    "a small crowd of mixed sizes, packed in clusters and stacked, is pushed as the grid's cells "
+    "would push it",
+    "[runtime][movement][bodies]") {
+  static_assert(bspf::kSortedNeighbourBodies == 64);
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO(methodName(method));
+  // 64 bodies (with the far one, 65: the grid's cells push those) of the
+  // three sizes in 16 clusters along the yard's outside, 2.4 m apart along x
+  // (so that no 34 lie within 4 cells along x, which would bring the grid
+  // back), each body placed at random within 1.2 m of
+  // its cluster's centre and up to 1.5 m up: pairs overlapping along every
+  // axis and pairs apart along only one of them, of unequal sizes (the
+  // sorting's cheap tests use the largest radii), some at one point.
+  std::uint32_t state = 2024;
+  auto next = [&state] {  // a fixed sequence on every platform
+    state = state * 1664525u + 1013904223u;
+    return float(state >> 8) / float(1 << 24);
+  };
+  Crowd crowd;
+  for (int i = 0; i < 64; ++i) {
+    const int cluster = i / 4;
+    const Vec3 centre(-18.5f + 2.4f * float(cluster), 1.2f, 9.0f);
+    const Vec3 offset =
+        i % 9 == 0 ? Vec3::Zero() : Vec3(1.2f * next() - 0.6f, 1.5f * next(), 1.2f * next() - 0.6f);
+    addCrowdBody(crowd, i, centre + offset, method);
+  }
+  const int contacts = requireSameAsWithFarBody(crowd, 40);
+  REQUIRE(contacts > 300);  // the crowd pushed itself: the comparison means something
+}
