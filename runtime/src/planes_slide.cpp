@@ -53,10 +53,14 @@ Move makeMove(const Vec3& start, const Vec3& end, EllipsoidRadii radii, float wa
                                              const detail::CandidateBlock& block, int lane,
                                              float startSide, float endSide, const Move& move,
                                              auto& local, Hit& best) {
-  detail::PlanesCold& candidate = local[block.slot[lane]];
+  const std::uint32_t slot = block.slot[lane];
+  detail::PlanesCold& candidate = local[slot];
   const float reach = block.reach[lane];
-  if (!candidate.grown.ready)
+  if (candidate.grownIn != local.generation()) {
+    candidate.triangle = local.triangle(slot);
     detail::growPlanes(world, candidate.triangle, move.radii, candidate.grown);
+    candidate.grownIn = local.generation();
+  }
   // Test the six planes where the centre crosses the offset plane (the
   // article leaves this position unspecified: testing the end lets fast
   // bodies skip small triangles). A body already within it is tested at

@@ -128,22 +128,18 @@ class LocalCandidates {
     // UnzeroedVector), where adding each block zeroed it.
     if (listed_.size() < made_.blocks.size()) listed_.resize(made_.blocks.size());
     std::size_t count = 0;
-    for (const detail::CandidateBlock& block : made_.blocks) {
-      for (std::uint32_t bits = detail::boxMask(block, local_); bits != 0; bits &= bits - 1) {
-        const int lane = std::countr_zero(bits);
-        detail::copyLane(block, lane, listed_[count / detail::kBlockLanes],
-                         int(count % detail::kBlockLanes));
-        ++count;
-      }
-    }
-    const std::span<detail::CandidateBlock> packed(
-        listed_.data(), (count + detail::kBlockLanes - 1) / detail::kBlockLanes);
-    detail::finishBlocks(packed, count);
-    workspace.lastScanned = count;
+    for (const detail::CandidateBlock& block : made_.blocks)
+      if (boxesOverlap(block.low, block.high, local_.low, local_.high)) listed_[count++] = block;
+    const std::span<detail::CandidateBlock> packed(listed_.data(), count);
+    workspace.lastScanned = count * detail::kBlockLanes;
     return workspace.lastBlocks = current_ = packed;
   }
 
   Cold& operator[](std::uint32_t slot) { return made_.cold[slot]; }
+  /// The triangle of candidate `slot`.
+  std::uint32_t triangle(std::uint32_t slot) const { return made_.triangles[slot]; }
+  /// MadeCandidates::generation of the candidates made last.
+  std::uint64_t generation() const { return made_.generation; }
 
   /// Where triangle `t` is among the candidates (made by the last around()):
   /// its block and lane, or nothing when it is not a candidate. The
@@ -182,12 +178,13 @@ class LocalCandidates {
       const CandidateTriangle& c = list[std::uint32_t(sorted_[slot])];
       detail::setLane(made_.blocks[slot / detail::kBlockLanes], int(slot % detail::kBlockLanes),
                       c.low, c.high, make_(c.triangle), slot);
-      made_.cold[slot].reset(c.triangle);
+      if constexpr (Cold::kResetWhenMade) made_.cold[slot].reset(c.triangle);
       made_.triangles[slot] = c.triangle;
     }
     detail::finishBlocks(made_.blocks, sorted_.size());
     made_.query = nearby.queryId();
     made_.radii = radii;
+    ++made_.generation;
   }
 
   static constexpr float kLocalGrowMetres = 0.02f;
