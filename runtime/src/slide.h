@@ -142,46 +142,59 @@ class LocalCandidates {
   std::uint64_t generation() const { return made_.generation; }
 
   /// Where triangle `t` is among the candidates (made by the last around()):
-  /// its block and lane, or nothing when it is not a candidate. The
-  /// candidates are in triangle order, so a binary search finds it.
+  /// its block and lane, or nothing when it is not a candidate. Candidates
+  /// in triangle order are found by a binary search, others by a scan of
+  /// their triangles (a few dozen, and each body asks for the same few
+  /// between makings: the answers are kept).
   std::optional<std::pair<const detail::CandidateBlock*, int>> laneOf(std::uint32_t t) {
     auto& [triangle, slot] = made_.lookups[t % made_.lookups.size()];
     if (triangle != t) {
-      const auto it = std::lower_bound(made_.triangles.begin(), made_.triangles.end(), t);
+      const auto begin = made_.triangles.begin(), end = made_.triangles.end();
+      auto it = end;
+      if constexpr (Cold::kInTriangleOrder) {
+        it = std::lower_bound(begin, end, t);
+        if (it != end && *it != t) it = end;
+      } else {
+        it = std::find(begin, end, t);
+      }
       triangle = t;
-      slot = it != made_.triangles.end() && *it == t ? std::uint32_t(it - made_.triangles.begin())
-                                                     : detail::MadeCandidates<Cold>::kNotListed;
+      slot = it != end ? std::uint32_t(it - begin) : detail::MadeCandidates<Cold>::kNotListed;
     }
     if (slot == detail::MadeCandidates<Cold>::kNotListed) return std::nullopt;
     return std::pair{&made_.blocks[slot / detail::kBlockLanes], int(slot % detail::kBlockLanes)};
   }
 
  private:
-  // Makes the candidates of the nearby triangles, in triangle order
-  // whatever order the query listed them in (which depends on the box it
-  // was made for): ties in the narrow phases then resolve the same with a
-  // fresh query as with a body's older one.
+  // Makes the candidates of the nearby triangles: in the order the query
+  // listed them, or (Cold::kInTriangleOrder) in triangle order whatever
+  // order the query listed them in (which depends on the box it was made
+  // for), where a narrow phase's ties would otherwise resolve differently
+  // with a fresh query than with a body's older one.
   void remake(const NearbyTriangles& nearby, EllipsoidRadii radii) {
-    // Sorted as keys (triangle, then its place in the list) rather than as
-    // the 28-byte entries: a third of a query's cost at 40 m/s went to
-    // swapping those.
     const std::span<const CandidateTriangle> list = nearby.list();
-    sorted_.resize(list.size());
-    for (std::size_t i = 0; i < list.size(); ++i)
-      sorted_[i] = std::uint64_t(list[i].triangle) << 32 | std::uint32_t(i);
-    std::sort(sorted_.begin(), sorted_.end());
-    made_.blocks.resize((sorted_.size() + detail::kBlockLanes - 1) / detail::kBlockLanes);
-    made_.cold.resize(sorted_.size());
-    made_.triangles.resize(sorted_.size());
+    const std::size_t count = list.size();
+    if constexpr (Cold::kInTriangleOrder) {
+      // Sorted as keys (triangle, then its place in the list) rather than
+      // as the 28-byte entries: a third of a query's cost at 40 m/s went to
+      // swapping those.
+      sorted_.resize(count);
+      for (std::size_t i = 0; i < count; ++i)
+        sorted_[i] = std::uint64_t(list[i].triangle) << 32 | std::uint32_t(i);
+      std::sort(sorted_.begin(), sorted_.end());
+    }
+    made_.blocks.resize((count + detail::kBlockLanes - 1) / detail::kBlockLanes);
+    made_.cold.resize(count);
+    made_.triangles.resize(count);
     made_.lookups.fill({kNoTriangle, detail::MadeCandidates<Cold>::kNotListed});
-    for (std::uint32_t slot = 0; slot < sorted_.size(); ++slot) {
-      const CandidateTriangle& c = list[std::uint32_t(sorted_[slot])];
+    for (std::uint32_t slot = 0; slot < count; ++slot) {
+      const CandidateTriangle& c =
+          list[Cold::kInTriangleOrder ? std::uint32_t(sorted_[slot]) : slot];
       detail::setLane(made_.blocks[slot / detail::kBlockLanes], int(slot % detail::kBlockLanes),
                       c.low, c.high, make_(c.triangle), slot);
       if constexpr (Cold::kResetWhenMade) made_.cold[slot].reset(c.triangle);
       made_.triangles[slot] = c.triangle;
     }
-    detail::finishBlocks(made_.blocks, sorted_.size());
+    detail::finishBlocks(made_.blocks, count);
     made_.query = nearby.queryId();
     made_.radii = radii;
     ++made_.generation;

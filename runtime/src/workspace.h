@@ -332,6 +332,11 @@ struct PlanesCold {
   /// cache line each, 160 bytes apart) was 4% of the planes slide's
   /// samples at 40 m/s, for the few entries a slide grows.
   static constexpr bool kResetWhenMade = false;
+  /// The planes method takes, of the candidates that block, the one facing
+  /// the move most, ties to the lower triangle: the order it tests them in
+  /// changes nothing, so they stay in the query's order (sorting them took
+  /// 4% of a 40 m/s step).
+  static constexpr bool kInTriangleOrder = false;
   std::uint32_t triangle;
   /// 0, the generation no candidates are made in, until first grown: a
   /// new entry (UnzeroedVector default-initialises it) is stale.
@@ -344,6 +349,7 @@ struct PlanesCold {
 /// normal exactly), made on first use.
 struct ExactCold {
   static constexpr bool kResetWhenMade = true;
+  static constexpr bool kInTriangleOrder = true;
   std::uint32_t triangle;
   bool ready = false;
   TriangleD sphere;
