@@ -122,7 +122,7 @@ class LocalCandidates {
     workspace.lastLocal = local_;
     if (made_.blocks.size() <= kScanWholeBlocks) {
       workspace.lastScanned = made_.cold.size();
-      return workspace.lastBlocks = current_ = made_.blocks;
+      return keep(workspace, made_.blocks.data(), made_.blocks.size());
     }
     // Room for every block, kept between slides (growing it writes nothing:
     // UnzeroedVector), where adding each block zeroed it.
@@ -130,9 +130,8 @@ class LocalCandidates {
     std::size_t count = 0;
     for (const detail::CandidateBlock& block : made_.blocks)
       if (boxesOverlap(block.low, block.high, local_.low, local_.high)) listed_[count++] = block;
-    const std::span<detail::CandidateBlock> packed(listed_.data(), count);
     workspace.lastScanned = count * detail::kBlockLanes;
-    return workspace.lastBlocks = current_ = packed;
+    return keep(workspace, listed_.data(), count);
   }
 
   Cold& operator[](std::uint32_t slot) { return made_.cold[slot]; }
@@ -165,6 +164,20 @@ class LocalCandidates {
   }
 
  private:
+  // Makes `count` blocks from `first` the list around() returns until the
+  // slide leaves its local box, and the workspace's last list. Each span is
+  // made from the pointer and count, not copied from the other: GCC copied
+  // a span just stored as two 8-byte words with one 16-byte load, which
+  // waited for the stores (a failed store forward: 4% of the slide's
+  // samples at walking speed).
+  std::span<const detail::CandidateBlock> keep(detail::StepWorkspace& workspace,
+                                               const detail::CandidateBlock* first,
+                                               std::size_t count) {
+    current_ = {first, count};
+    workspace.lastBlocks = {first, count};
+    return {first, count};
+  }
+
   // Makes the candidates of the nearby triangles: in the order the query
   // listed them, or (Cold::kInTriangleOrder) in triangle order whatever
   // order the query listed them in (which depends on the box it was made
