@@ -420,9 +420,11 @@ class ExactCandidates : public LocalCandidates<detail::ExactCold, Make> {
   /// The candidate in `slot`, in sphere space.
   detail::ExactCold& made(std::uint32_t slot) {
     detail::ExactCold& cold = (*this)[slot];
-    if (!cold.ready) {
+    if (cold.madeIn != this->generation()) {
+      cold.triangle = this->triangle(slot);
       cold.sphere = detail::TriangleD(sphereSpaceTriangle(world_, cold.triangle, toSphere_));
-      cold.ready = true;
+      cold.measured.distance = -1;
+      cold.madeIn = this->generation();
     }
     return cold;
   }
@@ -476,7 +478,7 @@ void recoverFromPenetration(const World& world, Vec3& p, const Vec3& toSphere, f
         p += away * (1 + padding - distance);
         pushed = true;
         addContact(result, worldNormal(away, toSphere), walkableNormalY, false,
-                   closest.cwiseQuotient(toSphere), local[slot].triangle);
+                   closest.cwiseQuotient(toSphere), local.triangle(slot));
       }
     }
     if (!pushed) return;
@@ -611,7 +613,7 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     if (planeCount < int(planes.size())) planes[planeCount++] = normal;
     move = rest.cwiseProduct(toSphere);
     ++result.iterations;
-    addContact(result, normal, walkableNormalY, impact.edge, touched, local[impactSlot].triangle);
+    addContact(result, normal, walkableNormalY, impact.edge, touched, local.triangle(impactSlot));
   }
   result.end = p.cwiseQuotient(toSphere);
   return result;

@@ -80,7 +80,9 @@ inline float nearbyPad(float moveLength) { return 0.5f * moveLength + 0.3f; }
 /// scans (unless they are few already). Packed again only when an iteration's swept box leaves the
 /// local box (a slide moves the end by about the move's length at most).
 /// `Make(std::uint32_t triangle)` returns the triangle's FaceTest for the
-/// body; `Cold::reset(triangle)` prepares the rest.
+/// body; `Cold` holds the rest, made by the narrow phase on first use in a
+/// making (generation()), and says whether the candidates are kept in
+/// triangle order (Cold::kInTriangleOrder).
 template <typename Cold, typename Make>
 class LocalCandidates {
  public:
@@ -204,7 +206,6 @@ class LocalCandidates {
           list[Cold::kInTriangleOrder ? std::uint32_t(sorted_[slot]) : slot];
       detail::setLane(made_.blocks[slot / detail::kBlockLanes], int(slot % detail::kBlockLanes),
                       c.low, c.high, make_(c.triangle), slot);
-      if constexpr (Cold::kResetWhenMade) made_.cold[slot].reset(c.triangle);
       made_.triangles[slot] = c.triangle;
     }
     detail::finishBlocks(made_.blocks, count);

@@ -324,14 +324,12 @@ template <typename T>
 using UnzeroedVector = std::vector<T, UnzeroedAllocator<T>>;
 
 /// A triangle as the planes method tests it for one body, beyond its
-/// CandidateBlock lane. Made candidates leave it untouched (most are never
-/// grown): it holds the triangle and planes grown in MadeCandidates::
-/// generation `grownIn`, and is stale in any other.
+/// CandidateBlock lane: the triangle and its planes, grown on first use in
+/// MadeCandidates::generation `grownIn` and stale in any other. Making the
+/// candidates writes none of these entries (160 bytes apart, most never
+/// grown): resetting each then was 4% of the planes slide's samples at
+/// 40 m/s in perf.
 struct PlanesCold {
-  /// Not reset when candidates are made: writing every entry's flag (a
-  /// cache line each, 160 bytes apart) was 4% of the planes slide's
-  /// samples at 40 m/s, for the few entries a slide grows.
-  static constexpr bool kResetWhenMade = false;
   /// The planes method takes, of the candidates that block, the one facing
   /// the move most, ties to the lower triangle: the order it tests them in
   /// changes nothing, so they stay in the query's order (sorting them took
@@ -348,19 +346,17 @@ struct PlanesCold {
 /// CandidateBlock lane: in sphere space (in double: its float corners and
 /// normal exactly), made on first use.
 struct ExactCold {
-  static constexpr bool kResetWhenMade = true;
+  /// Made on first use in a making (MadeCandidates::generation), like
+  /// PlanesCold: most of a list's entries (264 bytes apart) are never used.
   static constexpr bool kInTriangleOrder = true;
   std::uint32_t triangle;
-  bool ready = false;
+  /// The generation `sphere` and `measured` belong to; 0 (no making's) until
+  /// first made, so a new entry (default-initialised) is stale.
+  std::uint64_t madeIn = 0;
   TriangleD sphere;
-  /// The face stage's last distance from the body to it (kept over frames).
+  /// The face stage's last distance from the body to it (kept over frames,
+  /// while the candidates last).
   MeasuredDistance measured;
-  /// Makes this triangle `t`'s, not yet in sphere space.
-  void reset(std::uint32_t t) {
-    triangle = t;
-    ready = false;
-    measured.distance = -1;
-  }
 };
 
 /// A body's nearby triangles made into one narrow phase's candidates: in
