@@ -209,7 +209,6 @@ void growPlanes(const World& world, std::uint32_t triangle, EllipsoidRadii radii
   }
   for (int k = 6; k < 8; ++k) grown.set(k, Vec3::Zero(), kAlways);
   grown.highestY = highestCornerY(world, triangle);
-  grown.ready = true;
 }
 
 }  // namespace detail

@@ -54,14 +54,13 @@ struct alignas(16) GrownTriangle {
   /// corners from the level took three scattered ones (the test runs for
   /// most steep candidates a scan finds inside their planes).
   float highestY;
-  bool ready = false;
 
   void set(int k, const Vec3& normal, float planeOffset) {
     normalX[k] = normal.x(), normalY[k] = normal.y(), normalZ[k] = normal.z();
     offset[k] = planeOffset;
   }
 
-  /// Precondition: ready. With SSE, 4 planes per instruction; the same
+  /// Precondition: grown (growPlanes). With SSE, 4 planes per instruction; the same
   /// float operations in the same order as insideOneByOne (the tests
   /// compare them).
   bool inside(const Vec3& p) const {
@@ -127,7 +126,7 @@ inline Bounds slideSweptBounds(const Vec3& from, const Vec3& to, EllipsoidRadii 
 #endif
 }
 
-/// Fills `grown` for triangle `triangle` and `radii` (sets ready).
+/// Fills `grown` for triangle `triangle` and `radii`.
 void growPlanes(const World& world, std::uint32_t triangle, EllipsoidRadii radii,
                 GrownTriangle& grown);
 
@@ -153,7 +152,7 @@ struct alignas(32) CandidateBlock {
 };
 
 /// Sets `block`'s box from its used lanes. Call once its lanes are written;
-/// precondition: each lane is either set (setLane, copyLane) or cleared
+/// precondition: each lane is either set (setLane) or cleared
 /// (clearLanes), whose empty box (+infinity low, -infinity high) changes no
 /// minimum or maximum, so every lane is taken without a test (the loops
 /// vectorise; at 40 m/s this ran once per 8 candidates of every query).
@@ -198,16 +197,6 @@ inline void setLane(CandidateBlock& block, int lane, const Vec3& low, const Vec3
   block.normalZ[lane] = face.normal.z();
   block.distance[lane] = face.distance, block.reach[lane] = face.reach;
   block.slot[lane] = slot;
-}
-
-/// Copies lane `from` of `source` into lane `to` of `target`.
-inline void copyLane(const CandidateBlock& source, int from, CandidateBlock& target, int to) {
-  target.lowX[to] = source.lowX[from], target.lowY[to] = source.lowY[from];
-  target.lowZ[to] = source.lowZ[from], target.highX[to] = source.highX[from];
-  target.highY[to] = source.highY[from], target.highZ[to] = source.highZ[from];
-  target.normalX[to] = source.normalX[from], target.normalY[to] = source.normalY[from];
-  target.normalZ[to] = source.normalZ[from], target.distance[to] = source.distance[from];
-  target.reach[to] = source.reach[from], target.slot[to] = source.slot[from];
 }
 
 /// Empties lanes [from, kBlockLanes) of `block`.

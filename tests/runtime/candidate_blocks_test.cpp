@@ -176,7 +176,6 @@ TEST_CASE("the six-plane test with SSE agrees with the plane-by-plane reference"
       grown.set(k, randomPoint(rng, 1).normalized(),
                 std::uniform_real_distribution<float>(-3, 0.5f)(rng));
     for (int k = 6; k < 8; ++k) grown.set(k, Vec3::Zero(), -std::numeric_limits<float>::infinity());
-    grown.ready = true;
     const Vec3 p = randomPoint(rng, 2);
     INFO("round " << round);
     REQUIRE(grown.inside(p) == grown.insideOneByOne(p));
