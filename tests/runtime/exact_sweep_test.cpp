@@ -46,6 +46,20 @@ float floatAtOrBelow(double time) {
   return double(f) <= time ? f : std::nextafter(f, -std::numeric_limits<float>::infinity());
 }
 
+// Edge k of `triangle` (corner k to corner k + 1), its unit normal, and the
+// unit direction in the plane across the edge, out of the triangle: where
+// the tests place points near an edge.
+struct EdgeFrame {
+  Eigen::Vector3d from, to, normal, outward;
+};
+
+EdgeFrame edgeFrame(const TriangleD& triangle, int k) {
+  const Eigen::Vector3d corners[3] = {triangle.a, triangle.b, triangle.c};
+  EdgeFrame edge{corners[k], corners[(k + 1) % 3], triangle.normal.normalized(), {}};
+  edge.outward = (edge.to - edge.from).cross(edge.normal).normalized();
+  return edge;
+}
+
 }  // namespace
 
 TEST_CASE(
@@ -62,12 +76,9 @@ TEST_CASE(
     const TriangleD triangle(tri);
     // The point where the sphere touches the plane: just beyond an edge
     // (by up to 0.3, often much less), in the plane.
-    const Eigen::Vector3d corners[3] = {triangle.a, triangle.b, triangle.c};
-    const int k = int(rng() % 3);
-    const Eigen::Vector3d& from = corners[k];
-    const Eigen::Vector3d& to = corners[(k + 1) % 3];
-    const Eigen::Vector3d n = triangle.normal.normalized();
-    const Eigen::Vector3d outward = (to - from).cross(n).normalized();
+    const EdgeFrame frame = edgeFrame(triangle, int(rng() % 3));
+    const Eigen::Vector3d &from = frame.from, &to = frame.to, &n = frame.normal,
+                          &outward = frame.outward;
     const double beyond = 0.3 * std::pow(unit(rng), 3);
     const Eigen::Vector3d touch = from + (to - from) * (-0.1 + 1.2 * unit(rng)) + outward * beyond;
     // A move that reaches the plane at `touchTime` there, approaching it
@@ -190,12 +201,9 @@ TEST_CASE(
     // A point of the plane near edge k (inside or outside it, often by
     // very little, where the side values' signs turn), the start up to 2
     // in front of it (or just behind), the move towards and along the plane.
-    const Eigen::Vector3d corners[3] = {triangle.a, triangle.b, triangle.c};
-    const int k = int(rng() % 3);
-    const Eigen::Vector3d& from = corners[k];
-    const Eigen::Vector3d& to = corners[(k + 1) % 3];
-    const Eigen::Vector3d n = triangle.normal.normalized();
-    const Eigen::Vector3d outward = (to - from).cross(n).normalized();
+    const EdgeFrame frame = edgeFrame(triangle, int(rng() % 3));
+    const Eigen::Vector3d &from = frame.from, &to = frame.to, &n = frame.normal,
+                          &outward = frame.outward;
     const double beyond = (unit(rng) < 0.5 ? -1 : 1) * 1.5 * std::pow(unit(rng), 4);
     const Eigen::Vector3d near = from + (to - from) * (-0.2 + 1.4 * unit(rng)) + outward * beyond;
     const Eigen::Vector3d start = near + n * (-0.05 + 2 * unit(rng));
