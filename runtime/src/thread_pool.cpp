@@ -15,7 +15,7 @@
 
 namespace bspf {
 
-ThreadPool::ThreadPool(int threads) {
+ThreadPool::ThreadPool(int threads) : shares_(new Share[std::size_t(std::max(threads, 1))]) {
   assert(threads >= 1);
   workers_.reserve(std::size_t(threads > 1 ? threads - 1 : 0));
   for (int t = 1; t < threads; ++t) workers_.emplace_back([this, t] { workerLoop(t); });
@@ -51,10 +51,14 @@ bool spinUntil(Done done) {
 
 void ThreadPool::runRanges(int thread) {
   const RangeTask& task = *task_;
-  for (;;) {
-    const std::size_t first = nextRange_.fetch_add(chunk_, std::memory_order_relaxed);
-    if (first >= count_) return;
-    task(thread, first, std::min(count_, first + chunk_));
+  const int shares = threadCount();
+  for (int k = 0; k < shares; ++k) {
+    Share& share = shares_[std::size_t((thread + k) % shares)];
+    for (;;) {
+      const std::size_t first = share.next.fetch_add(chunk_, std::memory_order_relaxed);
+      if (first >= share.end) break;
+      task(thread, first, std::min(share.end, first + chunk_));
+    }
   }
 }
 
@@ -100,9 +104,15 @@ void ThreadPool::parallelFor(std::size_t count, std::size_t chunk, const RangeTa
   {
     std::lock_guard lock(mutex_);
     task_ = &task;
-    count_ = count;
     chunk_ = chunk;
-    nextRange_ = 0;
+    // Shares of whole chunks, so that every range but the last is a full one.
+    const std::size_t shares = std::size_t(threadCount());
+    const std::size_t chunks = count / chunk + (count % chunk != 0);
+    for (std::size_t p = 0; p < shares; ++p) {
+      shares_[p].next.store(std::min(count, chunks * p / shares * chunk),
+                            std::memory_order_relaxed);
+      shares_[p].end = std::min(count, chunks * (p + 1) / shares * chunk);
+    }
     joined_.store(0, std::memory_order_release);  // open, after the fields
     ++generation_;
   }

@@ -22,7 +22,8 @@ TEST_CASE("a thread pool's parallelFor covers every item exactly once, call afte
     std::atomic<bool> rangesFit = true, threadsInRange = true;
     pool.parallelFor(count, chunk, [&](int thread, std::size_t first, std::size_t last) {
       if (thread < 0 || thread >= threads) threadsInRange = false;
-      if (first >= last || last > count || last - first > chunk) rangesFit = false;
+      if (first >= last || last > count || last - first > chunk || first % chunk != 0)
+        rangesFit = false;
       for (std::size_t i = first; i < last; ++i) ++visits[i];
     });
     REQUIRE(rangesFit);

@@ -8,6 +8,7 @@
 #include <condition_variable>
 #include <cstddef>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -39,9 +40,12 @@ class ThreadPool {
 
   /// Calls `task` on consecutive ranges of at most `chunk` items covering
   /// [0, count) exactly once, on all the pool's threads, and returns when
-  /// every range is done. Threads take ranges in order as they become free,
-  /// so which thread runs which range varies from call to call: results must
-  /// not depend on it. `task` must not throw (std::terminate otherwise) and
+  /// every range is done. Thread t starts on the t-th of threadCount()
+  /// equal consecutive shares of [0, count), in order, and when its share is
+  /// done helps with the others' remaining ranges. With the same count a
+  /// thread so runs mostly the same items call after call (their data stays
+  /// in its core's cache), but which thread runs which range still varies:
+  /// results must not depend on it. `task` must not throw (std::terminate otherwise) and
   /// must not call parallelFor on the same pool. Precondition: chunk >= 1.
   /// Thread safety: one parallelFor at a time per pool; call it from one
   /// thread (or serialise the callers).
@@ -54,18 +58,28 @@ class ThreadPool {
   std::vector<std::thread> workers_;
   std::mutex mutex_;
   std::condition_variable wake_, done_;
-  // The current job: task_, count_ and chunk_ are written under mutex_
+  // The current job: task_, chunk_ and shares_ are written under mutex_
   // before generation_ changes, which tells workers a new one started.
   // Workers and the caller spin a little on generation_ and joined_ before
   // sleeping on the condition variables (a frame's phases follow each other
   // within microseconds, and a sleeping thread takes tens of them to wake),
-  // and take ranges with an atomic counter. A worker joins a job before it
+  // and take ranges with atomic counters. A worker joins a job before it
   // reads the job's fields; once the caller has run out of ranges it closes
   // the job, waits only for the workers that joined, and a worker that wakes
   // later finds it closed: the caller never waits for a late wake-up.
   const RangeTask* task_ = nullptr;
-  std::size_t count_ = 0, chunk_ = 1;
-  std::atomic<std::size_t> nextRange_{0};
+  std::size_t chunk_ = 1;
+  // Each thread's share of the current job's items, [next, end): a thread
+  // takes ranges from its own share first, then from the others'. A body's
+  // data then stays in one core's cache from frame to frame; handing every
+  // range out from one counter instead moved it between the cores, and the
+  // same work took 8 to 11% longer on 2 threads (measured on 1,024 walkers).
+  // Padded so that one share's counter does not slow another's.
+  struct alignas(64) Share {
+    std::atomic<std::size_t> next{0};
+    std::size_t end = 0;
+  };
+  std::unique_ptr<Share[]> shares_;
   std::atomic<unsigned long long> generation_{0};
   /// The workers inside the current job, plus kClosed once it is closed.
   std::atomic<unsigned> joined_{kClosed};
