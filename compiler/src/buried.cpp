@@ -210,7 +210,7 @@ std::vector<bool> findBuriedFaces(const SolidEdges& edges, BuriedReport& report,
   };
   if (containers.size() > 0) {
     if (pool)
-      pool->parallelFor(n, 256, range);
+      pool->parallelFor(n, 256, range, bspf::ThreadPool::Handout::InOrder);
     else
       range(0, 0, n);
   }

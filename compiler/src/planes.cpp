@@ -49,7 +49,7 @@ std::vector<bspf::schema::TrianglePlanes> computeTrianglePlanes(
   // number of threads. Chunks of 1,024 (about 0.2 ms each) share even a
   // small level's few thousand triangles between the threads.
   if (pool)
-    pool->parallelFor(out.size(), 1024, fill);
+    pool->parallelFor(out.size(), 1024, fill, bspf::ThreadPool::Handout::InOrder);
   else
     fill(0, 0, out.size());
   return out;

@@ -215,7 +215,7 @@ Mesh dropUnreachableFaces(const Mesh& mesh, const ReachSettings& settings, Reach
       for (std::size_t t = first; t < last; ++t) work(t);
     };
     if (pool)
-      pool->parallelFor(body.size(), 64, range);
+      pool->parallelFor(body.size(), 64, range, bspf::ThreadPool::Handout::InOrder);
     else
       range(0, 0, body.size());
   };

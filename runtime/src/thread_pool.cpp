@@ -93,7 +93,8 @@ void ThreadPool::workerLoop(int thread) {
   }
 }
 
-void ThreadPool::parallelFor(std::size_t count, std::size_t chunk, const RangeTask& task) {
+void ThreadPool::parallelFor(std::size_t count, std::size_t chunk, const RangeTask& task,
+                             Handout handout) {
   assert(chunk >= 1);
   if (count == 0) return;
   if (workers_.empty() || count <= chunk) {
@@ -109,6 +110,11 @@ void ThreadPool::parallelFor(std::size_t count, std::size_t chunk, const RangeTa
     const std::size_t shares = std::size_t(threadCount());
     const std::size_t chunks = count / chunk + (count % chunk != 0);
     for (std::size_t p = 0; p < shares; ++p) {
+      if (handout == Handout::InOrder) {
+        shares_[p].next.store(p == 0 ? 0 : count, std::memory_order_relaxed);
+        shares_[p].end = count;
+        continue;
+      }
       shares_[p].next.store(std::min(count, chunks * p / shares * chunk),
                             std::memory_order_relaxed);
       shares_[p].end = std::min(count, chunks * (p + 1) / shares * chunk);

@@ -11,7 +11,9 @@
 TEST_CASE("a thread pool's parallelFor covers every item exactly once, call after call",
           "[runtime][threads]") {
   const int threads = GENERATE(1, 2, 3, 4);
-  INFO(threads << " threads");
+  const auto handout =
+      GENERATE(bspf::ThreadPool::Handout::ThreadShares, bspf::ThreadPool::Handout::InOrder);
+  INFO(threads << " threads, handout " << int(handout));
   bspf::ThreadPool pool(threads);
   REQUIRE(pool.threadCount() == threads);
   for (int call = 0; call < 50; ++call) {
@@ -20,12 +22,15 @@ TEST_CASE("a thread pool's parallelFor covers every item exactly once, call afte
     INFO("call " << call << ": " << count << " items in ranges of " << chunk);
     const auto visits = std::make_unique<std::atomic<int>[]>(count + 1);
     std::atomic<bool> rangesFit = true, threadsInRange = true;
-    pool.parallelFor(count, chunk, [&](int thread, std::size_t first, std::size_t last) {
-      if (thread < 0 || thread >= threads) threadsInRange = false;
-      if (first >= last || last > count || last - first > chunk || first % chunk != 0)
-        rangesFit = false;
-      for (std::size_t i = first; i < last; ++i) ++visits[i];
-    });
+    pool.parallelFor(
+        count, chunk,
+        [&](int thread, std::size_t first, std::size_t last) {
+          if (thread < 0 || thread >= threads) threadsInRange = false;
+          if (first >= last || last > count || last - first > chunk || first % chunk != 0)
+            rangesFit = false;
+          for (std::size_t i = first; i < last; ++i) ++visits[i];
+        },
+        handout);
     REQUIRE(rangesFit);
     REQUIRE(threadsInRange);
     for (std::size_t i = 0; i < count; ++i) REQUIRE(visits[i] == 1);
