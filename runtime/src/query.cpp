@@ -13,36 +13,43 @@ namespace bspf {
 
 namespace {
 
-// At one node: the child on the query's near side, and which children the
-// query reaches.
+// At one node: the child on the query's near side (where its centre or
+// start lies, so always visited) and whether the far child is visited too.
 struct Visit {
   bool nearIsFront;
-  bool visitNear;
   bool visitFar;
 };
 
 // Appends every leaf a query reaches, depth first and near side first (the
 // order a path passes them), `visitOf(split)` deciding at each node.
-// Near-first order pushes at most one far child per level.
+// Shaped for the branch predictor: it goes down the near side without a
+// test per node but the loop's, and keeps the far children to visit on a
+// stack written at every node and advanced only when visited (about one
+// node in five), where popping every child and branching on whether to
+// push the far one mispredicted about once a node (cachegrind: 30 of a
+// 31-node walk's branches at 40 m/s on oacmpdm5).
 template <typename VisitOf>
 void collectLeaves(const World& world, std::vector<std::uint32_t>& leavesOut, VisitOf visitOf) {
   const std::span<const schema::Node> nodes = world.nodes();
-  std::array<std::int32_t, kMaxTreeDepth + 2> stack;
-  std::size_t top = 0;
-  stack[top++] = world.root();
-  while (top > 0) {
-    const std::int32_t ref = stack[--top];
-    if (ref < 0) {
-      leavesOut.push_back(static_cast<std::uint32_t>(-(ref + 1)));
-      continue;
+  // At most one far child waits per level above the current node.
+  std::array<std::int32_t, kMaxTreeDepth + 2> farChildren;
+  std::size_t waiting = 0;
+  std::int32_t ref = world.root();
+  for (;;) {
+    while (ref >= 0) {
+      const schema::Node& node = nodes[std::size_t(ref)];
+      const Visit visit = visitOf(node.split());
+      // Near and far chosen with a mask, not `?:`, which GCC made a branch
+      // on the side: a coin toss at every node.
+      const std::int32_t front = node.front(), back = node.back();
+      const std::int32_t swap = (front ^ back) & -std::int32_t(visit.nearIsFront);
+      farChildren[waiting] = front ^ swap;
+      waiting += visit.visitFar;
+      ref = back ^ swap;
     }
-    const schema::Node& node = nodes[ref];
-    const Visit visit = visitOf(node.split());
-    const std::int32_t nearChild = visit.nearIsFront ? node.front() : node.back();
-    const std::int32_t farChild = visit.nearIsFront ? node.back() : node.front();
-    const bool visitNear = visit.visitNear, visitFar = visit.visitFar;
-    if (visitFar) stack[top++] = farChild;
-    if (visitNear) stack[top++] = nearChild;
+    leavesOut.push_back(static_cast<std::uint32_t>(-(ref + 1)));
+    if (waiting == 0) return;
+    ref = farChildren[--waiting];
   }
 }
 
@@ -56,11 +63,12 @@ void collectSweptLeaves(const World& world, const Vec3& from, const Vec3& to, El
                         std::abs(split.distance()) * 4e-7f;
     const float startSide = signedDistance(split, from);
     const float endSide = signedDistance(split, to);
+    // The start's side is always touched (its distance is within reach of
+    // itself); the other when the path comes within reach of it.
     const bool touchesFront = std::max(startSide, endSide) > -reach;
     const bool touchesBack = std::min(startSide, endSide) < reach;
     const bool startsInFront = startSide >= 0;
-    return startsInFront ? Visit{true, touchesFront, touchesBack}
-                         : Visit{false, touchesBack, touchesFront};
+    return Visit{startsInFront, startsInFront ? touchesBack : touchesFront};
   });
 }
 
@@ -87,7 +95,7 @@ void collectBoxLeaves(const World& world, const Vec3& low, const Vec3& high,
     const float side = signedDistance(split, centre);
     // The centre's side always overlaps the box; the far side when the
     // plane passes within the box's reach.
-    return Visit{side >= 0, true, std::abs(side) < reach};
+    return Visit{side >= 0, std::abs(side) < reach};
   });
 }
 
@@ -105,27 +113,46 @@ class CandidateGather {
   }
 
   // Calls emit(triangle, box) for each triangle not listed yet whose box
-  // overlaps [low, high], already padded by the caller.
+  // overlaps [low, high], already padded by the caller, in the order of
+  // first appearance.
+  //
+  // Three passes with no branch on the data: the box test passes for 30 to
+  // 45% of a query's entries, and 60% of those that pass are a triangle
+  // listed already from another leaf, two coin tosses the branch predictor
+  // lost on about every other entry (cachegrind, walkers at 40 m/s on
+  // oacmpdm5). Each pass writes every entry and advances past those kept.
   template <typename Emit>
   void gather(const Vec3& low, const Vec3& high, Emit&& emit) {
     const std::span<const std::uint32_t> references = world_.leafTriangles();
     const std::span<const schema::Box> bounds = world_.leafTriangleBounds();
+    const std::span<const schema::Leaf> leaves = world_.leaves();
     const std::uint32_t generation = scratch_.generation_;
     const detail::StoredBoxTest test(low, high);
+    std::size_t entries = 0;
+    for (const std::uint32_t leafIndex : scratch_.leaves) entries += leaves[leafIndex].count();
+    if (scratch_.kept_.size() < entries) scratch_.kept_.resize(entries);
+    std::uint32_t* const kept = scratch_.kept_.data();
+    // The entries whose box overlaps, read in one run per leaf.
+    std::size_t overlapping = 0;
     for (const std::uint32_t leafIndex : scratch_.leaves) {
-      const schema::Leaf& leaf = world_.leaves()[leafIndex];
+      const schema::Leaf& leaf = leaves[leafIndex];
       const std::uint32_t end = leaf.first() + leaf.count();
-      // The boxes are read in one run per leaf; most fail here, before the
-      // triangle's stamp or planes are touched.
       for (std::uint32_t i = leaf.first(); i < end; ++i) {
-        const schema::Box& box = bounds[i];
-        if (!test.overlaps(box)) continue;
-        const std::uint32_t triangle = references[i];
-        if (scratch_.stamp_[triangle] == generation) continue;
-        scratch_.stamp_[triangle] = generation;
-        emit(triangle, box);
+        kept[overlapping] = i;
+        overlapping += test.overlaps(bounds[i]);
       }
     }
+    // Of those, the first of each triangle.
+    std::size_t firsts = 0;
+    for (std::size_t k = 0; k < overlapping; ++k) {
+      const std::uint32_t entry = kept[k];
+      std::uint32_t& stamp = scratch_.stamp_[references[entry]];
+      const bool unseen = stamp != generation;
+      stamp = generation;
+      kept[firsts] = entry;
+      firsts += unseen;
+    }
+    for (std::size_t k = 0; k < firsts; ++k) emit(references[kept[k]], bounds[kept[k]]);
   }
 
  private:

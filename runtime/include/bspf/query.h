@@ -60,6 +60,7 @@ class SweepScratch {
  private:
   friend class CandidateGather;
   std::vector<std::uint32_t> stamp_;
+  std::vector<std::uint32_t> kept_;  // a query's leaf entries, as it sifts them
   std::uint32_t generation_ = 0;
 };
 
