@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <numeric>
 
+#include "parallel.h"
+
 namespace bspc {
 
 namespace {
@@ -208,12 +210,7 @@ std::vector<bool> findBuriedFaces(const SolidEdges& edges, BuriedReport& report,
           {mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]]}, pieces.pieceOf[t]);
     }
   };
-  if (containers.size() > 0) {
-    if (pool)
-      pool->parallelFor(n, 256, range, bspf::ThreadPool::Handout::InOrder);
-    else
-      range(0, 0, n);
-  }
+  if (containers.size() > 0) runParallel(pool, n, 256, range);
   std::vector<bool> out(n);
   for (std::size_t t = 0; t < n; ++t) {
     out[t] = buried[t] != 0;

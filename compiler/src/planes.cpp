@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include <bspc/planes.h>
 
+#include "parallel.h"
+
 namespace bspc {
 
 namespace {
@@ -48,10 +50,7 @@ std::vector<bspf::schema::TrianglePlanes> computeTrianglePlanes(
   // Each triangle's planes land in its own slot: the same bytes on any
   // number of threads. Chunks of 1,024 (about 0.2 ms each) share even a
   // small level's few thousand triangles between the threads.
-  if (pool)
-    pool->parallelFor(out.size(), 1024, fill, bspf::ThreadPool::Handout::InOrder);
-  else
-    fill(0, 0, out.size());
+  runParallel(pool, out.size(), 1024, fill);
   return out;
 }
 

@@ -14,6 +14,8 @@
 #include <limits>
 #include <sstream>
 
+#include "parallel.h"
+
 namespace bspc {
 
 namespace {
@@ -214,10 +216,7 @@ Mesh dropUnreachableFaces(const Mesh& mesh, const ReachSettings& settings, Reach
     const auto range = [&](int, std::size_t first, std::size_t last) {
       for (std::size_t t = first; t < last; ++t) work(t);
     };
-    if (pool)
-      pool->parallelFor(body.size(), 64, range, bspf::ThreadPool::Handout::InOrder);
-    else
-      range(0, 0, body.size());
+    runParallel(pool, body.size(), 64, range);
   };
   Bits blocked(grid.count()), reached(grid.count());
   eachTriangle([&](std::size_t t) {
