@@ -165,7 +165,10 @@ class PlainObjReader {
     if (*p < '1' || *p > '9') return false;
     std::int64_t magnitude = 0;
     const char* digits = p;
-    for (; isDigit(*p); ++p) magnitude = 10 * magnitude + (*p - '0');
+    // Stops accumulating past 9 digits (the word is refused then) so a
+    // long run of digits cannot overflow.
+    for (; isDigit(*p); ++p)
+      if (p - digits < 9) magnitude = 10 * magnitude + (*p - '0');
     if (p - digits > 9 || !endsWord(p)) return false;
     value = negative ? -magnitude : magnitude;
     at_ = p;

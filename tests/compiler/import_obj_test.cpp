@@ -146,28 +146,29 @@ TEST_CASE("bspc's own OBJ reader leaves every other file to assimp, which reads 
           "[compiler][import]") {
   const std::string triangle = "v 0 0 0\nv 1 0 0\nv 0 0 1\n";
   const std::vector<std::string> others = {
-      "o box\n" + triangle + "f 1 2 3\n",             // objects
-      triangle + "usemtl stone\nf 1 2 3\n",           // materials
-      triangle + "g wall\nf 1 2 3\n",                 // groups
-      triangle + "vt 0 0\nf 1/1 2/1 3/1\n",           // texture coordinates
-      triangle + "vn 0 1 0\nf 1//1 2//1 3//1\n",      // normals
-      triangle + "v 1 0 1\nf 1 2 4 3\n",              // a quad
-      triangle + "f 1 2\n",                           // a line
-      triangle + "f 1 2 \\\n3\n",                     // a line continuation
-      triangle + "f 1 2 3\rf 3 2 1\n",                // a lone carriage return
-      triangle + "f 1 2 3\n# a \\\nf 3 2 1\n",        // a comment continued
-      " " + triangle + "f 1 2 3\n",                   // a statement after a blank
-      "\xEF\xBB\xBF" + triangle + "f 1 2 3\n",        // a byte order mark
-      triangle + "f 1 2 3 # a comment\n",             // a comment after a face
-      triangle + "f 01 2 3\n",                        // a leading zero
-      "v 0 0\nv 1 0 0\nv 0 0 1\nv 1 1 1\nf 1 2 3\n",  // a vertex of two numbers
-      "v 0 0 0 1\nv 1 0 0 1\nv 0 0 1 1\nf 1 2 3\n",   // homogeneous vertices
-      "v 0 0 0\nv 1 0 .5\nv 0 0 1\nf 1 2 3\n",        // a word assimp does not count
-      triangle + "f 1 2 4\n",                         // an index out of range
-      triangle + "f 0 1 2\n",                         // index 0
-      triangle + "f -4 -1 -2\n",                      // before the first vertex
-      triangle,                                       // no face
-      triangle + std::string("f 1 2 3\n\0", 9),       // a NUL byte
+      "o box\n" + triangle + "f 1 2 3\n",                 // objects
+      triangle + "usemtl stone\nf 1 2 3\n",               // materials
+      triangle + "g wall\nf 1 2 3\n",                     // groups
+      triangle + "vt 0 0\nf 1/1 2/1 3/1\n",               // texture coordinates
+      triangle + "vn 0 1 0\nf 1//1 2//1 3//1\n",          // normals
+      triangle + "v 1 0 1\nf 1 2 4 3\n",                  // a quad
+      triangle + "f 1 2\n",                               // a line
+      triangle + "f 1 2 \\\n3\n",                         // a line continuation
+      triangle + "f 1 2 3\rf 3 2 1\n",                    // a lone carriage return
+      triangle + "f 1 2 3\n# a \\\nf 3 2 1\n",            // a comment continued
+      " " + triangle + "f 1 2 3\n",                       // a statement after a blank
+      "\xEF\xBB\xBF" + triangle + "f 1 2 3\n",            // a byte order mark
+      triangle + "f 1 2 3 # a comment\n",                 // a comment after a face
+      triangle + "f 01 2 3\n",                            // a leading zero
+      "v 0 0\nv 1 0 0\nv 0 0 1\nv 1 1 1\nf 1 2 3\n",      // a vertex of two numbers
+      "v 0 0 0 1\nv 1 0 0 1\nv 0 0 1 1\nf 1 2 3\n",       // homogeneous vertices
+      "v 0 0 0\nv 1 0 .5\nv 0 0 1\nf 1 2 3\n",            // a word assimp does not count
+      triangle + "f 1 2 4\n",                             // an index out of range
+      triangle + "f 0 1 2\n",                             // index 0
+      triangle + "f 1 2 " + std::string(80, '8') + "\n",  // an index of 80 digits
+      triangle + "f -4 -1 -2\n",                          // before the first vertex
+      triangle,                                           // no face
+      triangle + std::string("f 1 2 3\n\0", 9),           // a NUL byte
   };
   for (std::size_t k = 0; k < others.size(); ++k) {
     INFO("file " << k << ": " << others[k]);
