@@ -128,7 +128,8 @@ class LocalCandidates {
     }
     // Room for every block, kept between slides (growing it writes nothing:
     // UnzeroedVector), where adding each block zeroed it.
-    if (listed_.size() < made_.blocks.size()) listed_.resize(made_.blocks.size());
+    if (listed_.size() < made_.blocks.size())
+      detail::resizeForRewrite(listed_, made_.blocks.size());
     std::size_t count = 0;
     for (const detail::CandidateBlock& block : made_.blocks)
       if (boxesOverlap(block.low, block.high, local_.low, local_.high)) listed_[count++] = block;
@@ -192,14 +193,14 @@ class LocalCandidates {
       // Sorted as keys (triangle, then its place in the list) rather than
       // as the 28-byte entries: a third of a query's cost at 40 m/s went to
       // swapping those.
-      sorted_.resize(count);
+      detail::resizeForRewrite(sorted_, count);
       for (std::size_t i = 0; i < count; ++i)
         sorted_[i] = std::uint64_t(list[i].triangle) << 32 | std::uint32_t(i);
       std::sort(sorted_.begin(), sorted_.end());
     }
-    made_.blocks.resize((count + detail::kBlockLanes - 1) / detail::kBlockLanes);
-    made_.cold.resize(count);
-    made_.triangles.resize(count);
+    detail::resizeForRewrite(made_.blocks, (count + detail::kBlockLanes - 1) / detail::kBlockLanes);
+    detail::resizeForRewrite(made_.cold, count);
+    detail::resizeForRewrite(made_.triangles, count);
     made_.lookups.fill({kNoTriangle, detail::MadeCandidates<Cold>::kNotListed});
     for (std::uint32_t slot = 0; slot < count; ++slot) {
       const CandidateTriangle& c =

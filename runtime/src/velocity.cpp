@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The velocity model of the step: friction, input and gravity before the
-// move (futureVelocity), the contacts' response after it (respondToContacts).
+// move (futureVelocity, inline in velocity.h), the contacts' response after
+// it (respondToContacts).
 #include "velocity.h"
 
 #include <algorithm>
@@ -36,20 +37,6 @@ void respondToContacts(Body& body, const SlideResult& slide, float dt) {
       body.velocity -= (1.0f + (bounce ? e : 0.0f)) * into * normal;
     }
   }
-}
-
-void futureVelocity(Body& body, const Vec3& force, float dt) {
-  const MovementSettings& s = body.settings;
-  Eigen::Vector2f horizontal(body.velocity.x(), body.velocity.z());
-  const float speed = horizontal.norm();
-  const float friction = body.grounded ? s.groundFriction : s.airFriction;
-  if (speed > 0) horizontal *= std::max(0.0f, speed - friction * dt) / speed;
-  horizontal += Eigen::Vector2f(force.x(), force.z()) * dt;
-  const float limited = horizontal.norm();
-  if (limited > s.maxHorizontalSpeed) horizontal *= s.maxHorizontalSpeed / limited;
-  body.velocity.x() = horizontal.x();
-  body.velocity.z() = horizontal.y();
-  body.velocity.y() -= s.gravity * dt;
 }
 
 }  // namespace detail

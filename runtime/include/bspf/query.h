@@ -139,16 +139,14 @@ inline void padBounds(Vec3& low, Vec3& high) {
 /// misses it cannot touch the swept volume. Inline: the step calls it once
 /// per slide iteration.
 inline Bounds sweptBounds(const Vec3& from, const Vec3& to, EllipsoidRadii radii) {
-  // padBounds' arithmetic, the same operations lane by lane, on 4-float
-  // arrays (the fourth unused): Eigen vectorises these, not 3-vectors, and
-  // the step calls this once per slide iteration.
-  const Eigen::Array4f f(from.x(), from.y(), from.z(), 0), t(to.x(), to.y(), to.z(), 0);
-  const Eigen::Array4f extent(radii.xz, radii.y, radii.xz, 0);
-  Eigen::Array4f low = f.min(t) - extent, high = f.max(t) + extent;
-  const Eigen::Array4f pad = kSweepMarginMetres + 4e-7f * low.abs().max(high.abs());
-  low -= pad;
-  high += pad;
-  return {low.head<3>().matrix(), high.head<3>().matrix()};
+  // Three lanes, each in scalar registers: Eigen built a 4-float array from
+  // four floats by storing them on the stack and loading them back as one
+  // 16-byte value, which cannot be forwarded from the stores and waited for
+  // them (a fifth of the body phase's level check in perf, walkers).
+  const Vec3 extent(radii.xz, radii.y, radii.xz);
+  Bounds bounds{from.cwiseMin(to) - extent, from.cwiseMax(to) + extent};
+  padBounds(bounds.low, bounds.high);
+  return bounds;
 }
 
 /// Whether the boxes [aLow, aHigh] and [bLow, bHigh] overlap (touching
