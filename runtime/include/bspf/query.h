@@ -142,7 +142,7 @@ inline Bounds sweptBounds(const Vec3& from, const Vec3& to, EllipsoidRadii radii
   // Three lanes, each in scalar registers: Eigen built a 4-float array from
   // four floats by storing them on the stack and loading them back as one
   // 16-byte value, which cannot be forwarded from the stores and waited for
-  // them (a fifth of the body phase's level check in perf, walkers).
+  // them (two fifths of `touchesNothing`'s samples in perf, walkers).
   const Vec3 extent(radii.xz, radii.y, radii.xz);
   Bounds bounds{from.cwiseMin(to) - extent, from.cwiseMax(to) + extent};
   padBounds(bounds.low, bounds.high);
