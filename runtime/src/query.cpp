@@ -13,11 +13,10 @@ namespace bspf {
 
 namespace {
 
-// At one node: the child on the query's near side, and which children the
-// query reaches.
+// At one node: the child on the query's near side (where its centre or
+// start lies, so always reached) and whether the far child is reached too.
 struct Visit {
   bool nearIsFront;
-  bool visitNear;
   bool visitFar;
 };
 
@@ -40,9 +39,8 @@ void collectLeaves(const World& world, std::vector<std::uint32_t>& leavesOut, Vi
     const Visit visit = visitOf(node.split());
     const std::int32_t nearChild = visit.nearIsFront ? node.front() : node.back();
     const std::int32_t farChild = visit.nearIsFront ? node.back() : node.front();
-    const bool visitNear = visit.visitNear, visitFar = visit.visitFar;
-    if (visitFar) stack[top++] = farChild;
-    if (visitNear) stack[top++] = nearChild;
+    if (visit.visitFar) stack[top++] = farChild;
+    stack[top++] = nearChild;
   }
 }
 
@@ -59,8 +57,9 @@ void collectSweptLeaves(const World& world, const Vec3& from, const Vec3& to, El
     const bool touchesFront = std::max(startSide, endSide) > -reach;
     const bool touchesBack = std::min(startSide, endSide) < reach;
     const bool startsInFront = startSide >= 0;
-    return startsInFront ? Visit{true, touchesFront, touchesBack}
-                         : Visit{false, touchesBack, touchesFront};
+    // The start's side is always touched (its distance is within reach of
+    // itself); the other when the path comes within reach of it.
+    return Visit{startsInFront, startsInFront ? touchesBack : touchesFront};
   });
 }
 
@@ -87,7 +86,7 @@ void collectBoxLeaves(const World& world, const Vec3& low, const Vec3& high,
     const float side = signedDistance(split, centre);
     // The centre's side always overlaps the box; the far side when the
     // plane passes within the box's reach.
-    return Visit{side >= 0, true, std::abs(side) < reach};
+    return Visit{side >= 0, std::abs(side) < reach};
   });
 }
 
