@@ -1065,8 +1065,13 @@ class TreeBuilder {
   // The candidates, in order, each plane once: a later copy of a plane
   // (many triangles of a wall sample the same one) has the same counts and
   // cells as the first, so it loses every tie to it and is never chosen.
-  // `slots` is working memory for a hash set of the planes so far (a scan
-  // of them all was a tenth of the build).
+  // The axis planes need no look-up: an axis's quantiles come in order (an
+  // equal one is the one before), and the axes' normals differ. A triangle
+  // plane can equal one only when its normal is that axis (flipped, it
+  // faces the other way): those few are compared with their axis's planes.
+  // `slots` is working memory for a hash set of the triangle planes so far
+  // (a scan of them all was a tenth of the build); small nodes, most of
+  // the tree's, were spending more on the set than on counting.
   void candidates(const Lists& lists, std::vector<Candidate>& out,
                   std::vector<std::int32_t>& slots) const {
     const auto n = lists.size();
@@ -1075,49 +1080,59 @@ class TreeBuilder {
                trianglePlanes = settings_.candidates != SplitCandidates::Axis;
     const std::uint32_t quantiles = settings_.axisCandidatesPerAxis;
     const std::size_t step = std::max<std::size_t>(1, n / settings_.triangleCandidates);
+    const std::size_t sampled = trianglePlanes ? (n + step - 1) / step : 0;
     // Room for every plane tried, written by index: push_back, not inlined,
     // was a third of this.
-    const std::size_t most = (axisPlanes ? 3 * std::size_t(quantiles) : 0) +
-                             (trianglePlanes ? (n + step - 1) / step : 0);
+    const std::size_t most = (axisPlanes ? 3 * std::size_t(quantiles) : 0) + sampled;
     if (out.size() < most) out.resize(most);
     std::size_t kept = 0;
-    // At most half full: fewer than twice triangleCandidates triangle planes
-    // (the stride rounds down) besides the axis planes.
-    std::size_t tableSize = 64;
-    while (tableSize < 2 * (3 * std::size_t(settings_.axisCandidatesPerAxis) +
-                            2 * std::size_t(settings_.triangleCandidates)))
-      tableSize *= 2;
-    slots.assign(tableSize, -1);
-    const auto add = [&](const Candidate& candidate, std::uint64_t hash) {
-      const Split& split = candidate.split;
-      for (std::size_t slot = std::size_t(hash >> 40) & (tableSize - 1);;
-           slot = (slot + 1) & (tableSize - 1)) {
-        if (slots[slot] < 0) {
-          slots[slot] = static_cast<std::int32_t>(kept);
-          out[kept++] = candidate;
-          return;
-        }
-        const Split& c = out[std::size_t(slots[slot])].split;
-        if (c.distance == split.distance && c.normal == split.normal) return;
-      }
-    };
+    std::array<std::size_t, 3> axisFirst{}, axisEnd{};
     if (axisPlanes) {
+      // Quantile q at q * n / (quantiles + 1): the quotient and remainder
+      // of q * n grow by those of n, one division a node, not one a plane.
+      const std::size_t parts = std::size_t(quantiles) + 1, whole = n / parts, rest = n % parts;
       for (int axis = 0; axis < 3; ++axis) {
+        axisFirst[axis] = kept;
         float previous = std::numeric_limits<float>::quiet_NaN();
+        std::size_t at = 0, remainder = 0;
         for (std::uint32_t q = 1; q <= quantiles; ++q) {
-          const std::uint32_t t = lists.byAxis[axis][q * n / (quantiles + 1)];
+          at += whole;
+          remainder += rest;
+          if (remainder >= parts) ++at, remainder -= parts;
+          const std::uint32_t t = lists.byAxis[axis][at];
           const float value = static_cast<float>(centroids_[t][axis]);
           if (value == previous) continue;
           previous = value;
-          const Candidate candidate{{Eigen::Vector3f::Unit(axis), value}, axis, false};
-          add(candidate, planeHash(candidate.split));
+          out[kept++] = {{Eigen::Vector3f::Unit(axis), value}, axis, false};
         }
+        axisEnd[axis] = kept;
       }
     }
     if (trianglePlanes) {
+      // At most half full.
+      std::size_t tableSize = 16;
+      while (tableSize < 2 * sampled) tableSize *= 2;
+      slots.assign(tableSize, -1);
       for (std::size_t i = 0; i < n; i += step) {
         const TrianglePlane& plane = trianglePlanes_[triangles[i]];
-        add(plane.candidate, plane.hash);
+        const Candidate& candidate = plane.candidate;
+        const Split& split = candidate.split;
+        if (candidate.axis >= 0 && !candidate.flipped) {
+          const std::size_t axis = std::size_t(candidate.axis);
+          std::size_t k = axisFirst[axis];
+          while (k < axisEnd[axis] && !(out[k].split.distance == split.distance)) ++k;
+          if (k < axisEnd[axis]) continue;
+        }
+        for (std::size_t slot = std::size_t(plane.hash >> 40) & (tableSize - 1);;
+             slot = (slot + 1) & (tableSize - 1)) {
+          if (slots[slot] < 0) {
+            slots[slot] = static_cast<std::int32_t>(kept);
+            out[kept++] = candidate;
+            break;
+          }
+          const Split& c = out[std::size_t(slots[slot])].split;
+          if (c.distance == split.distance && c.normal == split.normal) break;
+        }
       }
     }
     out.resize(kept);
@@ -1284,16 +1299,28 @@ class TreeBuilder {
     // Ranks sorted, not the candidates, whose cells make them large to move.
     scratch.ranked.resize(kept);
     for (std::size_t i = 0; i < kept; ++i) scratch.ranked[i] = {scratch.counted[i].score, i};
-    std::sort(scratch.ranked.begin(), scratch.ranked.end());
+    bool sorted = false;
     auto best = [&](double reach) -> std::optional<Chosen> {
       const double whole = cell.reachVolume(reach);
-      for (const auto& [score, i] : scratch.ranked) {
+      auto pays = [&](std::size_t i) {
         auto& c = scratch.counted[i];
         if (!c.cells) c.cells = cell.clippedBoth(c.split);
         const double cost = 1.0 + (c.cells->first.reachVolume(reach) * c.frontTotal +
                                    c.cells->second.reachVolume(reach) * c.backTotal) /
                                       whole;
-        if (cost < count) return Chosen{c.split, *c.cells};
+        return cost < count;
+      };
+      if (scratch.ranked.empty()) return std::nullopt;
+      // The first in rank most often pays: found in one pass, it spares the
+      // sort (a small node's sort cost more than its counting).
+      const std::size_t first =
+          std::min_element(scratch.ranked.begin(), scratch.ranked.end())->second;
+      if (pays(first)) return Chosen{scratch.counted[first].split, *scratch.counted[first].cells};
+      if (!sorted) std::sort(scratch.ranked.begin(), scratch.ranked.end());
+      sorted = true;
+      for (std::size_t k = 1; k < scratch.ranked.size(); ++k) {
+        const std::size_t i = scratch.ranked[k].second;
+        if (pays(i)) return Chosen{scratch.counted[i].split, *scratch.counted[i].cells};
       }
       return std::nullopt;
     };
