@@ -87,6 +87,8 @@ std::string describeOptions(const CompileSettings& s) {
   // Only when off, so the line of a compile that keeps no buried face is
   // the one bspc wrote before the rule.
   if (!s.dropBuriedFaces) out << " drop-buried-faces=0";
+  // Likewise only when on.
+  if (s.tree.exhaustiveSplitSearch) out << " exhaustive-split-search=1";
   // The reach rule shapes the output too: how many points and which body.
   if (!s.reach.from.empty())
     out << " reach-points=" << s.reach.from.size() << " body-radii=" << s.reach.radiusXZ << ","

@@ -106,11 +106,15 @@ struct TreeSettings {
   std::uint32_t axisCandidatesPerAxis = 7;
   /// Triangle-plane candidates, sampled evenly from the node. 1 to 256.
   std::uint32_t triangleCandidates = 24;
-  // In a node of more than 128 triangles, all the candidates above are
-  // scored on an even sample of 64 of its triangles and only the 4 best
-  // are counted on all of them (build_tree.cpp, chooseSplit): the build
-  // takes half the instructions for the same query figures within 1%
-  // (docs/measurements.md).
+  /// Count every candidate on every triangle of every node, as bspc did up
+  /// to d2c698a. Off (the default), a node of more than 128 triangles
+  /// scores its candidates on an even sample of 64 of them and counts only
+  /// the 4 best on all (build_tree.cpp, chooseSplit): the build takes half
+  /// the instructions, and on the shared levels the walkers' steps cost the
+  /// same (leaves per query 10% fewer to 4% more, candidates within 0.3%:
+  /// docs/measurements.md, "Issue 12 closed"). On: for comparison, or a
+  /// level where the sample misleads; the build is about twice as slow.
+  bool exhaustiveSplitSearch = false;
 };
 
 /// The most a blob can hold: FlatBuffers' limit, 2^31 - 1 bytes (just under
