@@ -194,6 +194,35 @@ struct Lists {
   std::size_t size() const { return order.size(); }
 };
 
+// Small lists a subtree's nodes are done with, kept for the next nodes'
+// lists: a node's partition made and freed up to eight, most of them small,
+// and the allocator's calls were a twentieth of the tree's instructions.
+// Bounded, so a large level's subtrees keep no more than they did.
+class SpareLists {
+ public:
+  // An empty list, with room when one is kept.
+  IndexList take() {
+    if (kept_.empty()) return {};
+    IndexList list = std::move(kept_.back());
+    kept_.pop_back();
+    return list;
+  }
+  // `list` kept if small and room remains; freed otherwise.
+  void give(IndexList&& list) {
+    if (list.capacity() == 0) return;
+    if (list.capacity() > kLargest || kept_.size() >= kMostKept) {
+      IndexList().swap(list);
+      return;
+    }
+    list.clear();
+    kept_.push_back(std::move(list));
+  }
+
+ private:
+  static constexpr std::size_t kLargest = 4096, kMostKept = 64;
+  std::vector<IndexList> kept_;
+};
+
 // A node's per-triangle passes (gathering its columns, classifying and
 // sharing out its lists) run on a pool's threads above this many triangles,
 // in ranges of kParallelRange (a multiple of four): below it, waking the
@@ -813,7 +842,8 @@ class TreeBuilder {
   // same either way.
   bool partition(Lists& triangles, const Split& split, [[maybe_unused]] const Columns& columns,
                  std::uint32_t childDepth, Lists& front, Lists& back,
-                 std::vector<std::uint8_t>& side, bspf::ThreadPool* pool) const {
+                 std::vector<std::uint8_t>& side, bspf::ThreadPool* pool,
+                 SpareLists* spare = nullptr) const {
     side.resize(mesh_.triangles.size());
     const double nx = split.normal.x(), ny = split.normal.y(), nz = split.normal.z();
     const double distance = split.distance, tolerance = onPlaneTolerance(split);
@@ -979,6 +1009,18 @@ class TreeBuilder {
 #endif
     const bool parallel = pool && triangles.size() > kParallelAbove;
     const std::size_t n = triangles.size();
+    const auto fresh = [&](IndexList& list) {
+      if (spare && list.capacity() == 0) list = spare->take();
+    };
+    const auto release = [&](IndexList& list) {
+      if (spare)
+        spare->give(std::move(list));
+      else
+        list.shrink_to_fit();
+      list.clear();
+    };
+    fresh(front.order);
+    fresh(back.order);
     front.order.resize(n);
     back.order.resize(n);
     std::size_t toFront = 0, toBack = 0;
@@ -1008,15 +1050,15 @@ class TreeBuilder {
     front.order.resize(toFront);
     back.order.resize(toBack);
     triangles.order.clear();
-    triangles.order.shrink_to_fit();
+    release(triangles.order);
     // A side's list is written when wanted: a child that will be a leaf
     // (few triangles, or at the depth limit) never reads its axis orders.
     const auto share = [&](IndexList& from, IndexList& toFrontList, IndexList& toBackList,
                            bool wantFront, bool wantBack) {
       if (from.empty()) return;
       // One spare slot each: the write past a side's last kept entry.
-      if (wantFront) toFrontList.resize(toFront + 1);
-      if (wantBack) toBackList.resize(toBack + 1);
+      if (wantFront) fresh(toFrontList), toFrontList.resize(toFront + 1);
+      if (wantBack) fresh(toBackList), toBackList.resize(toBack + 1);
       std::uint32_t *frontOut = toFrontList.data(), *backOut = toBackList.data();
       // Written unconditionally, kept by the side's bit: no branch to mispredict.
       if (wantFront && wantBack)
@@ -1039,7 +1081,7 @@ class TreeBuilder {
       if (wantFront) toFrontList.pop_back();
       if (wantBack) toBackList.pop_back();
       from.clear();
-      from.shrink_to_fit();
+      release(from);
     };
     const auto splitFurther = [&](std::size_t count) {
       return count > settings_.maxLeafTriangles && childDepth < settings_.maxDepth;
@@ -1177,6 +1219,7 @@ class TreeBuilder {
 
   // Per-thread working memory of the split search.
   struct Scratch {
+    SpareLists spare;
     Columns columns, sampleColumns;
     IndexList sample;
     std::vector<std::uint8_t> side;
@@ -1201,7 +1244,8 @@ class TreeBuilder {
     // The padded size: a block's end is a multiple of four.
     const std::size_t n = columns.padded, m = candidates.size();
     const std::size_t blocks = (n + kBlock - 1) / kBlock;
-    scratch.blockCounts.resize(blocks * m);
+    // Only grown: every entry read below is written first.
+    if (scratch.blockCounts.size() < blocks * m) scratch.blockCounts.resize(blocks * m);
     runParallel(pool, blocks, 1, [&](int, std::size_t first, std::size_t last) {
       for (std::size_t b = first; b < last; ++b) {
         const std::size_t begin = b * kBlock, end = std::min(n, begin + kBlock);
@@ -1365,7 +1409,7 @@ class TreeBuilder {
     const std::optional<Chosen> chosen = chooseSplit(triangles, cell, scratch, nullptr);
     Lists front, back;
     if (!chosen || !partition(triangles, chosen->split, scratch.columns, depth + 1, front, back,
-                              scratch.side, nullptr))
+                              scratch.side, nullptr, &scratch.spare))
       return makeLeaf(triangles, depth, share, tree);
     const double whole = double(front.size() + back.size());
     const double frontShare = share * double(front.size()) / whole;
@@ -1379,6 +1423,10 @@ class TreeBuilder {
     const std::int32_t backChild = buildNode(back, backCell, depth + 1, backShare, tree, scratch);
     tree.nodes[std::size_t(index)] =
         bspf::schema::Node(toPlane(chosen->split), frontChild, backChild);
+    for (Lists* lists : {&front, &back}) {
+      scratch.spare.give(std::move(lists->order));
+      for (IndexList& list : lists->byAxis) scratch.spare.give(std::move(list));
+    }
     return index;
   }
 
