@@ -1012,12 +1012,12 @@ class TreeBuilder {
     const auto fresh = [&](IndexList& list) {
       if (spare && list.capacity() == 0) list = spare->take();
     };
+    // A list done with: kept for the next node's, or freed.
     const auto release = [&](IndexList& list) {
       if (spare)
         spare->give(std::move(list));
       else
-        list.shrink_to_fit();
-      list.clear();
+        IndexList().swap(list);
     };
     fresh(front.order);
     fresh(back.order);
@@ -1049,7 +1049,6 @@ class TreeBuilder {
     if (toFront == n || toBack == n) return false;
     front.order.resize(toFront);
     back.order.resize(toBack);
-    triangles.order.clear();
     release(triangles.order);
     // A side's list is written when wanted: a child that will be a leaf
     // (few triangles, or at the depth limit) never reads its axis orders.
@@ -1080,7 +1079,6 @@ class TreeBuilder {
         }
       if (wantFront) toFrontList.pop_back();
       if (wantBack) toBackList.pop_back();
-      from.clear();
       release(from);
     };
     const auto splitFurther = [&](std::size_t count) {
