@@ -153,8 +153,8 @@ int main(int argc, char** argv) {
       ->type_name("N")
       ->capture_default_str();
   app.add_flag("--exhaustive-split-search", settings.tree.exhaustiveSplitSearch,
-               "Count every split candidate on every triangle of a node (about twice the "
-               "tree build's time; by default a node of more than 128 triangles picks its 4 best "
+               "Count every split candidate on every triangle of a node (about a fifth more "
+               "tree build time; by default a node of more than 128 triangles picks its 4 best "
                "candidates on a sample of 64)");
   app.add_option("--import-timeout", settings.import.timeoutSeconds,
                  "Seconds the importer may take before it is stopped")

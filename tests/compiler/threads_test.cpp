@@ -150,6 +150,11 @@ struct PinnedTree {
   std::uint64_t digest;
 };
 
+std::ostream& operator<<(std::ostream& out, const PinnedTree& tree) {
+  return out << "nodes " << tree.nodes << ", leaves " << tree.leaves << ", entries " << tree.entries
+             << ", digest " << tree.digest;
+}
+
 PinnedTree pinnedTree(const std::string& name, bool exhaustive) {
   const auto dir = bspf::test::freshTempDir(name);
   const bspc::Mesh mesh = busyMesh();
@@ -205,8 +210,7 @@ TEST_CASE("the tree of a fixed mesh is the one the sampled split search makes",
   // the exhaustive search's (docs/measurements.md, "Issue 12 closed"). A
   // change meant to reshape the tree updates them, with measurements.
   const PinnedTree tree = pinnedTree("threads-pinned", false);
-  INFO("nodes " << tree.nodes << ", leaves " << tree.leaves << ", entries " << tree.entries
-                << ", digest " << tree.digest);
+  INFO(tree);
   CHECK(tree.nodes == 2087);
   CHECK(tree.leaves == 2088);
   CHECK(tree.entries == 12835);
@@ -218,8 +222,7 @@ TEST_CASE("the exhaustive split search gives back the tree bspc made before the 
   // The exhaustive search of d2c698a to b6f74a0 made 2073 nodes and 12559
   // entries with this digest: the option gives back that tree exactly.
   const PinnedTree tree = pinnedTree("threads-pinned-exhaustive", true);
-  INFO("nodes " << tree.nodes << ", leaves " << tree.leaves << ", entries " << tree.entries
-                << ", digest " << tree.digest);
+  INFO(tree);
   CHECK(tree.nodes == 2073);
   CHECK(tree.entries == 12559);
   CHECK(tree.digest == 16656847616224568676ull);
