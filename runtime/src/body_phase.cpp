@@ -341,15 +341,31 @@ void BodyGrid::sweepPairsBySorting() {
     for (; at > 0 && sweepOrder_[at - 1] > key; --at) sweepOrder_[at] = sweepOrder_[at - 1];
     sweepOrder_[at] = key;
   }
+  // The boxes copied out in that order, beside their flags (the scan reads
+  // them in a row), and each pair's tests combined into one branch: the
+  // scan's short-circuit branches mispredicted on most pairs whose x ranges
+  // overlap (at 40 m/s about 130 such pairs a frame for 64 walkers, 16 of
+  // them meeting; 5% of the step went to this loop).
+  sweepBoxes_.resize(n);
   for (std::uint32_t k = 0; k < n; ++k) {
-    const std::uint32_t a = std::uint32_t(sweepOrder_[k]);
-    const Mover& p = movers_[a];
-    for (std::uint32_t l = k + 1; l < n; ++l) {
-      const std::uint32_t b = std::uint32_t(sweepOrder_[l]);
-      const Mover& q = movers_[b];
-      if (q.low.x() > p.high.x()) break;
-      if ((p.fast || q.fast) && boxesMeet(p.low, p.high, q.low, q.high))
-        sweepPairs_.push_back(std::uint64_t(std::min(a, b)) << 32 | std::max(a, b));
+    const std::uint32_t i = std::uint32_t(sweepOrder_[k]);
+    const Mover& m = movers_[i];
+    sweepBoxes_[k] = {m.low.x(), m.high.x(), m.low.y(), m.high.y(),
+                      m.low.z(), m.high.z(), i,         std::uint32_t(m.fast)};
+  }
+  const SweepBox* const boxes = sweepBoxes_.data();
+  for (std::uint32_t k = 0; k < n; ++k) {
+    const SweepBox& p = boxes[k];
+    // Sorted by low x, each box after p starts at or beyond p's start: none
+    // meets p once one starts beyond p's end. The test is boxesMeet's.
+    for (std::uint32_t l = k + 1; l < n && !(boxes[l].lowX > p.highX); ++l) {
+      const SweepBox& q = boxes[l];
+      const bool meet = ((p.fast | q.fast) != 0) & (p.lowX <= q.highX) & (q.lowX <= p.highX) &
+                        (p.lowY <= q.highY) & (q.lowY <= p.highY) & (p.lowZ <= q.highZ) &
+                        (q.lowZ <= p.highZ);
+      if (meet)
+        sweepPairs_.push_back(std::uint64_t(std::min(p.body, q.body)) << 32 |
+                              std::max(p.body, q.body));
     }
   }
 }

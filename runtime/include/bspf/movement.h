@@ -496,6 +496,12 @@ class BodyGrid {
   std::vector<std::uint64_t> sweepPairs_;                            ///< a << 32 | b, a < b
   /// Low x's ordered bits << 32 | body, sorted; kept for the next sweep.
   std::vector<std::uint64_t> sweepOrder_;
+  /// A mover's box and whether it is fast, in sweepOrder_'s order.
+  struct SweepBox {
+    float lowX, highX, lowY, highY, lowZ, highZ;
+    std::uint32_t body, fast;
+  };
+  std::vector<SweepBox> sweepBoxes_;
   std::vector<std::uint32_t> oversize_;  ///< fast bodies of more than kMaxSweepPieces pieces
   /// The last build found the pairs by sorting (findNeighboursBySorting):
   /// entries_ are by body index, places_ and the cells unused.
