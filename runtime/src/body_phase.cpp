@@ -710,11 +710,8 @@ bool touchesNothing(const World& world, const Vec3& from, const Vec3& to, Ellips
   // oa_dm5); scanning the blocks, not the list and the level's records, made
   // the pushes 10% faster on oa_dm5 at 6 and 40 m/s (oa_dm4's lists are
   // short: the same there).
-  auto madeFor = [&](const auto& made) {
-    return made.query == nearby.queryId() && made.radii.xz == radii.xz && made.radii.y == radii.y;
-  };
-  const bool planesMade = madeFor(cache.planes);
-  if (planesMade || madeFor(cache.exact)) {
+  const bool planesMade = cache.planes.madeFrom(nearby, radii);
+  if (planesMade || cache.exact.madeFrom(nearby, radii)) {
     const auto& blocks = planesMade ? cache.planes.blocks : cache.exact.blocks;
     const auto& triangles = planesMade ? cache.planes.triangles : cache.exact.triangles;
     for (std::size_t b = 0; b < blocks.size(); ++b) {

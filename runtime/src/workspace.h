@@ -385,6 +385,11 @@ struct MadeCandidates {
   /// when made (PlanesCold) names the making it belongs to.
   std::uint64_t generation = 0;
   EllipsoidRadii radii{0, 0};  ///< they were made for
+
+  /// Whether they are `nearby`'s current list, made for `bodyRadii`.
+  bool madeFrom(const NearbyTriangles& nearby, EllipsoidRadii bodyRadii) const {
+    return query == nearby.queryId() && radii.xz == bodyRadii.xz && radii.y == bodyRadii.y;
+  }
 };
 
 /// What one body keeps from frame to frame: its tree query and the
