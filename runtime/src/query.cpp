@@ -181,15 +181,18 @@ void collectBoxCandidates(const World& world, const Vec3& low, const Vec3& high,
       });
 }
 
+bool NearbyTriangles::holds(const World& world, const Vec3& low, const Vec3& high) const {
+  return worldId_ == world.id() && (low.array() >= low_.array()).all() &&
+         (high.array() <= high_.array()).all();
+}
+
 void NearbyTriangles::cover(const World& world, const Vec3& low, const Vec3& high, float pad,
                             SweepScratch& scratch, const Vec3& ahead) {
   // Reused while it holds the box, unless it is far larger than a query
   // for this box would be: one long move (a big push, a fast fall) must not
   // leave the body scanning a long list for many frames after.
   const Vec3 spare = (high_ - low_) - (high - low);
-  if (worldId_ == world.id() && (low.array() >= low_.array()).all() &&
-      (high.array() <= high_.array()).all() &&
-      (spare.array() <= 4 * pad + 0.1f + ahead.array().abs()).all())
+  if (holds(world, low, high) && (spare.array() <= 4 * pad + 0.1f + ahead.array().abs()).all())
     return;
   worldId_ = world.id();
   low_ = low - Vec3::Constant(pad) + ahead.cwiseMin(0.0f);

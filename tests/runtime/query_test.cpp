@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <optional>
 #include <random>
+#include <set>
 
 #include "stored_box.h"
 #include "support/exact_geometry.h"
@@ -354,9 +355,11 @@ TEST_CASE(
     const Vec3 stretch = ahead ? Vec3(3 * (centre - before)) : Vec3::Zero();
     const Vec3 low = centre - half, high = centre + half;
     const Vec3 spare = (queriedHigh - queriedLow) - (high - low);
-    const bool inside = frame > 0 && (low.array() >= queriedLow.array()).all() &&
-                        (high.array() <= queriedHigh.array()).all() &&
-                        (spare.array() <= 4 * pad + 0.1f + stretch.array().abs()).all();
+    const bool contained = frame > 0 && (low.array() >= queriedLow.array()).all() &&
+                           (high.array() <= queriedHigh.array()).all();
+    const bool inside =
+        contained && (spare.array() <= 4 * pad + 0.1f + stretch.array().abs()).all();
+    REQUIRE(nearby.holds(world, low, high) == contained);
     if (!inside) {
       ++expectedQueries;
       queriedLow = low - Vec3::Constant(pad) + stretch.cwiseMin(0.0f);
@@ -366,6 +369,7 @@ TEST_CASE(
     }
     nearby.cover(world, low, high, pad, scratch, stretch);
     REQUIRE(nearby.queries() == expectedQueries);
+    REQUIRE(nearby.holds(world, low, high));
     std::fill(isListed.begin(), isListed.end(), 0);
     for (const bspf::CandidateTriangle& c : nearby.list()) isListed[c.triangle] = 1;
     for (std::uint32_t t = 0; t < world.triangles().size(); ++t) {
@@ -390,6 +394,46 @@ TEST_CASE(
   REQUIRE(expectedQueries > 200);
   REQUIRE(touching > 2000);
   REQUIRE(onlyBoxNear > 100);
+}
+
+TEST_CASE(
+    "the nearby triangles hold a box far inside a much larger query, which cover() would make "
+    "again, and nothing after clear() or on another world",
+    "[runtime][query]") {
+  const bspf::test::AlignedBytes bytes(deepSoupBlob()), otherBytes(deepSoupBlob());
+  const bspf::World world = *bspf::viewWorld(bytes.span()).world;
+  const bspf::World other = *bspf::viewWorld(otherBytes.span()).world;
+  bspf::SweepScratch scratch;
+  bspf::NearbyTriangles nearby;
+  // Queried for [-1, 1] padded by 5 m: [-6, 6] on each axis.
+  const Vec3 low(-1, -1, -1), high(1, 1, 1);
+  REQUIRE_FALSE(nearby.holds(world, low, high));
+  nearby.cover(world, low, high, 5.0f, scratch);
+  REQUIRE(nearby.queries() == 1);
+  const Vec3 smallLow(-2, -3, -2), smallHigh(2, 1, 2);
+  REQUIRE(nearby.holds(world, smallLow, smallHigh));
+  REQUIRE(nearby.holds(world, low - Vec3::Constant(5), high + Vec3::Constant(5)));
+  REQUIRE_FALSE(nearby.holds(world, low - Vec3::Constant(5.01f), high));
+  REQUIRE_FALSE(nearby.holds(other, smallLow, smallHigh));
+  // What holds the small box holds every triangle with a point in it.
+  std::set<std::uint32_t> listed;
+  for (const bspf::CandidateTriangle& c : nearby.list()) listed.insert(c.triangle);
+  int inSmallBox = 0;
+  for (std::uint32_t t = 0; t < world.triangles().size(); ++t) {
+    const auto& tri = world.triangles()[t];
+    if (!bspf::test::triangleTouchesBox(corner(world, tri.v0()), corner(world, tri.v1()),
+                                        corner(world, tri.v2()), smallLow.cast<double>(),
+                                        smallHigh.cast<double>()))
+      continue;
+    ++inSmallBox;
+    REQUIRE(listed.count(t) == 1);
+  }
+  // cover() with a small pad finds the query far too large and makes another.
+  nearby.cover(world, smallLow, smallHigh, 0.1f, scratch);
+  REQUIRE(nearby.queries() == 2);
+  nearby.clear();
+  REQUIRE_FALSE(nearby.holds(world, smallLow, smallHigh));
+  REQUIRE(inSmallBox > 5);
 }
 
 TEST_CASE("the triangle-box judge tells a triangle in a box from one only its box reaches",

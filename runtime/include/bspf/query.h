@@ -102,6 +102,12 @@ class NearbyTriangles {
   /// pad >= 0.
   void cover(const World& world, const Vec3& low, const Vec3& high, float pad,
              SweepScratch& scratch, const Vec3& ahead = Vec3::Zero());
+  /// Whether list() holds (at least) every triangle with a point in
+  /// [low, high] (metres) on `world`: the box last queried on `world`
+  /// contains [low, high]. Unlike cover(), it accepts a box however much
+  /// larger: for a one-off test near a body, reusing the body's list costs
+  /// less than a query. Preconditions: finite, low <= high.
+  bool holds(const World& world, const Vec3& low, const Vec3& high) const;
   /// Forgets the last query, so the next cover() queries again.
   void clear() { worldId_ = 0; }
   /// The triangles of the last query, in leaf order, with their boxes.
