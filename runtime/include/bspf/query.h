@@ -95,11 +95,11 @@ class NearbyTriangles {
   /// the box but which has no point in it may be missing. Queries the tree
   /// for [low, high] grown by `pad` metres on every side only when
   /// [low, high] is not inside the box last queried on this `world` (by
-  /// World::id()), or when that box is more than 4 * pad + 0.1 m larger
-  /// along an axis (it would list too much). `ahead`, metres: a query also
-  /// reaches this much further along each axis on the side it points to
-  /// (where a moving body goes next). Preconditions: finite, low <= high,
-  /// pad >= 0.
+  /// World::id()), or when that box is larger than [low, high] by more than
+  /// 6 * pad + 0.1 m plus |ahead| along an axis (it would list too much).
+  /// `ahead`, metres: a query also reaches this much further along each axis
+  /// on the side it points to (where a moving body goes next).
+  /// Preconditions: finite, low <= high, pad >= 0.
   void cover(const World& world, const Vec3& low, const Vec3& high, float pad,
              SweepScratch& scratch, const Vec3& ahead = Vec3::Zero());
   /// Whether list() holds (at least) every triangle with a point in
