@@ -698,11 +698,12 @@ bool touchesNothing(const World& world, const Vec3& from, const Vec3& to, Ellips
   NearbyTriangles& nearby = cache.nearby;
   if (!nearby.holds(world, box.low, box.high))
     nearby.cover(world, box.low, box.high, kPushQueryPad + 2 * (to - from).norm(), sweep);
-  // Whether a triangle whose box overlaps the move's keeps clear, its face
-  // plane and the body's extent along it given.
-  auto clear = [&](const Vec3& normal, float distance, float extent) {
-    const float fromSide = normal.dot(from) - distance, toSide = normal.dot(to) - distance;
-    const float reach = extent + margin;
+  // Whether a triangle whose box overlaps the move's keeps clear, given its
+  // face plane and the body's extent along it (detail::planesFaceTest).
+  auto clear = [&](const detail::FaceTest& face) {
+    const float fromSide = face.normal.dot(from) - face.distance,
+                toSide = face.normal.dot(to) - face.distance;
+    const float reach = face.reach + margin;
     return !(std::min(fromSide, toSide) < reach && std::max(fromSide, toSide) > -reach);
   };
   // The candidates the body's level move made from this query, when it
@@ -718,31 +719,25 @@ bool touchesNothing(const World& world, const Vec3& from, const Vec3& to, Ellips
   if (planesMade || cache.exact.madeFrom(nearby, radii)) {
     const auto& blocks = planesMade ? cache.planes.blocks : cache.exact.blocks;
     const auto& triangles = planesMade ? cache.planes.triangles : cache.exact.triangles;
-    for (std::size_t b = 0; b < blocks.size(); ++b) {
-      const detail::CandidateBlock& block = blocks[b];
+    for (const detail::CandidateBlock& block : blocks) {
       if (!boxesOverlap(block.low, block.high, box.low, box.high)) continue;
       for (std::uint32_t lanes = detail::boxMask(block, box); lanes != 0; lanes &= lanes - 1) {
         const int lane = std::countr_zero(lanes);
-        if (planesMade) {
-          if (!clear(Vec3(block.normalX[lane], block.normalY[lane], block.normalZ[lane]),
-                     block.distance[lane], block.reach[lane]))
-            return false;
-        } else {
-          // The exact sweep's lanes hold a padded extent: the plane and
-          // extent as the list's scan takes them.
-          const schema::Plane& face = world.trianglePlanes()[triangles[block.slot[lane]]].face();
-          const Vec3 normal = toVec3(face.normal());
-          if (!clear(normal, face.distance(), effectiveRadius(normal, radii))) return false;
-        }
+        // The exact sweep's lanes hold a padded extent: for them, the plane
+        // and extent as the list's scan takes them.
+        const detail::FaceTest face =
+            planesMade ? detail::FaceTest{Vec3(block.normalX[lane], block.normalY[lane],
+                                               block.normalZ[lane]),
+                                          block.distance[lane], block.reach[lane]}
+                       : detail::planesFaceTest(world, triangles[block.slot[lane]], radii);
+        if (!clear(face)) return false;
       }
     }
     return true;
   }
   for (const CandidateTriangle& c : nearby.list()) {
     if (!boxesOverlap(c.low, c.high, box.low, box.high)) continue;
-    const schema::Plane& face = world.trianglePlanes()[c.triangle].face();
-    const Vec3 normal = toVec3(face.normal());
-    if (!clear(normal, face.distance(), effectiveRadius(normal, radii))) return false;
+    if (!clear(detail::planesFaceTest(world, c.triangle, radii))) return false;
   }
   return true;
 }

@@ -176,12 +176,6 @@ bool meetConstraints(const std::array<const Constraint*, N>& set, float maxShift
 
 namespace detail {
 
-FaceTest planesFaceTest(const World& world, std::uint32_t triangle, EllipsoidRadii radii) {
-  const schema::Plane& face = world.trianglePlanes()[triangle].face();
-  const Vec3 normal = toVec3(face.normal());
-  return {normal, face.distance(), effectiveRadius(normal, radii)};
-}
-
 void growPlanes(const World& world, std::uint32_t triangle, EllipsoidRadii radii,
                 GrownTriangle& grown) {
   const schema::TrianglePlanes& planes = world.trianglePlanes()[triangle];

@@ -466,8 +466,14 @@ std::size_t stepRangeAgainstLevel(const World& world, std::span<Body> bodies,
 InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt,
                      StepScratch& scratch, StepReport* report);
 
-/// The planes method's pre-check values of triangle `triangle` for `radii`.
-FaceTest planesFaceTest(const World& world, std::uint32_t triangle, EllipsoidRadii radii);
+/// The planes method's pre-check values of triangle `triangle` for `radii`:
+/// its face plane and the body's extent along it. Inline: a push's
+/// clearance test runs it for every triangle near the push.
+inline FaceTest planesFaceTest(const World& world, std::uint32_t triangle, EllipsoidRadii radii) {
+  const schema::Plane& face = world.trianglePlanes()[triangle].face();
+  const Vec3 normal = toVec3(face.normal());
+  return {normal, face.distance(), effectiveRadius(normal, radii)};
+}
 /// The exact sweep's: its reach padded for float rounding.
 FaceTest exactFaceTest(const World& world, std::uint32_t triangle, EllipsoidRadii radii);
 
