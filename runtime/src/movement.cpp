@@ -35,8 +35,8 @@ std::size_t StepScratch::lastSlideCandidates() const {
   // Counted here, not in the slide: a short list is scanned whole, its
   // lanes' boxes tested by the masks, and only the count needs them apart.
   std::size_t count = 0;
-  for (const detail::CandidateBlock& block : workspace_->lastBlocks)
-    count += std::size_t(std::popcount(detail::boxMask(block, workspace_->lastLocal)));
+  for (const detail::CandidateBlock* const block : workspace_->lastBlocks)
+    count += std::size_t(std::popcount(detail::boxMask(*block, workspace_->lastLocal)));
   return count;
 }
 

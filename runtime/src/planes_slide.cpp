@@ -98,10 +98,11 @@ Move makeMove(const Vec3& start, const Vec3& end, EllipsoidRadii radii, float wa
 // !found()). Filled in place: the slide's one Hit, never copied back.
 // `planesMask`: detail::planesMaskFunction(), asked once per slide.
 void findBlockingTriangle(const World& world, const Move& move, const Bounds& swept, auto& local,
-                          std::span<const detail::CandidateBlock> blocks,
-                          detail::PlanesMaskFunction planesMask, Hit& best) {
+                          detail::BlockList blocks, detail::PlanesMaskFunction planesMask,
+                          Hit& best) {
   detail::LaneSides sides;
-  for (const detail::CandidateBlock& block : blocks) {
+  for (const detail::CandidateBlock* const listed : blocks) {
+    const detail::CandidateBlock& block = *listed;
     // The cheap tests for the whole block at once (the box, then the
     // pre-check's two dot products, whose values it keeps); the six planes
     // only for the few lanes that pass (about 4 a scan on the shared
@@ -233,7 +234,7 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
   for (int iteration = 0;; ++iteration) {
     const Bounds swept = detail::slideSweptBounds(start, result.end, radii);
     const Move move = makeMove(start, result.end, radii, walkableNormalY);
-    const std::span<const detail::CandidateBlock> blocks =
+    const detail::BlockList blocks =
         local.around(world, swept, moveLength, radii, scratch, desiredEnd - start);
     // The triangles the body met last step (its ground, the wall it walks
     // into) are most often what blocks it again: tested alone, each is met

@@ -75,9 +75,9 @@ inline float nearbyPad(float moveLength) { return 0.5f * moveLength + 0.3f; }
 
 /// The triangles one slide's iterations test: the body's nearby triangles
 /// (StepScratch::nearby, or the body's cache in use), made into candidates for its radii once per
-/// tree query (kept with the body between frames, their tests precomputed), of which those whose
-/// box overlaps a local box around the slide are packed into a few CandidateBlocks every iteration
-/// scans (unless they are few already). Packed again only when an iteration's swept box leaves the
+/// tree query (kept with the body between frames, their tests precomputed) in CandidateBlocks, of
+/// which those whose box overlaps a local box around the slide are listed for every iteration to
+/// scan (all of them when they are few). Listed again only when an iteration's swept box leaves the
 /// local box (a slide moves the end by about the move's length at most).
 /// `Make(std::uint32_t triangle)` returns the triangle's FaceTest for the
 /// body; `Cold` holds the rest, made by the narrow phase on first use in a
@@ -87,7 +87,7 @@ template <typename Cold, typename Make>
 class LocalCandidates {
  public:
   LocalCandidates(detail::MadeCandidates<Cold>& made,
-                  detail::UnzeroedVector<detail::CandidateBlock>& listed,
+                  detail::UnzeroedVector<const detail::CandidateBlock*>& listed,
                   detail::UnzeroedVector<std::uint64_t>& sorted, Make make)
       : made_(made), listed_(listed), sorted_(sorted), make_(make) {}
 
@@ -100,10 +100,9 @@ class LocalCandidates {
   /// fewer instructions per step at 6 m/s and 2% at 40 m/s than none. Tuned
   /// while walls were hints too: then 8 moves or no cap were as good at
   /// 6 m/s and worse at 40, 0.5 m and 1.2 m 2% worse at 40).
-  std::span<const detail::CandidateBlock> around(const World& world, const Bounds& swept,
-                                                 float moveLength, EllipsoidRadii radii,
-                                                 StepScratch& scratch,
-                                                 const Vec3& move = Vec3::Zero()) {
+  detail::BlockList around(const World& world, const Bounds& swept, float moveLength,
+                           EllipsoidRadii radii, StepScratch& scratch,
+                           const Vec3& move = Vec3::Zero()) {
     if (valid_ && (swept.low.array() >= local_.low.array()).all() &&
         (swept.high.array() <= local_.high.array()).all())
       return current_;
@@ -118,22 +117,23 @@ class LocalCandidates {
     // the lanes it saves (up to 6 blocks, 48 candidates: measured on
     // walkers, 3 blocks took 1 to 4% more instructions per step, 5 and 8
     // the same). A long one (fast bodies, dense geometry) is packed down to
-    // the lanes whose box overlaps the local box, in order.
+    // the blocks whose box overlaps the local box, in order.
     detail::StepWorkspace& workspace = scratch.workspace();
     workspace.lastLocal = local_;
-    if (made_.blocks.size() <= kScanWholeBlocks) {
-      workspace.lastScanned = made_.cold.size();
-      return keep(workspace, made_.blocks.data(), made_.blocks.size());
-    }
     // Room for every block, kept between slides (growing it writes nothing:
-    // UnzeroedVector), where adding each block zeroed it.
+    // UnzeroedVector).
     if (listed_.size() < made_.blocks.size())
       detail::resizeForRewrite(listed_, made_.blocks.size());
     std::size_t count = 0;
-    for (const detail::CandidateBlock& block : made_.blocks)
-      if (boxesOverlap(block.low, block.high, local_.low, local_.high)) listed_[count++] = block;
-    workspace.lastScanned = count * detail::kBlockLanes;
-    return keep(workspace, listed_.data(), count);
+    if (made_.blocks.size() <= kScanWholeBlocks) {
+      for (const detail::CandidateBlock& block : made_.blocks) listed_[count++] = &block;
+      workspace.lastScanned = made_.cold.size();
+    } else {
+      for (const detail::CandidateBlock& block : made_.blocks)
+        if (boxesOverlap(block.low, block.high, local_.low, local_.high)) listed_[count++] = &block;
+      workspace.lastScanned = count * detail::kBlockLanes;
+    }
+    return keep(workspace, count);
   }
 
   Cold& operator[](std::uint32_t slot) { return made_.cold[slot]; }
@@ -166,15 +166,14 @@ class LocalCandidates {
   }
 
  private:
-  // Makes `count` blocks from `first` the list around() returns until the
-  // slide leaves its local box, and the workspace's last list. Each span is
-  // made from the pointer and count, not copied from the other: GCC copied
-  // a span just stored as two 8-byte words with one 16-byte load, which
-  // waited for the stores (a failed store forward: 4% of the slide's
+  // Makes the first `count` blocks listed the list around() returns until
+  // the slide leaves its local box, and the workspace's last list. Each span
+  // is made from the pointer and count, not copied from the other: GCC
+  // copied a span just stored as two 8-byte words with one 16-byte load,
+  // which waited for the stores (a failed store forward: 4% of the slide's
   // samples at walking speed).
-  std::span<const detail::CandidateBlock> keep(detail::StepWorkspace& workspace,
-                                               const detail::CandidateBlock* first,
-                                               std::size_t count) {
+  detail::BlockList keep(detail::StepWorkspace& workspace, std::size_t count) {
+    const detail::CandidateBlock* const* first = listed_.data();
     current_ = {first, count};
     workspace.lastBlocks = {first, count};
     return {first, count};
@@ -219,13 +218,13 @@ class LocalCandidates {
   static constexpr float kAheadMetres = 0.8f;
   static constexpr std::size_t kScanWholeBlocks = 6;
   detail::MadeCandidates<Cold>& made_;
-  detail::UnzeroedVector<detail::CandidateBlock>& listed_;
+  detail::UnzeroedVector<const detail::CandidateBlock*>& listed_;
   detail::UnzeroedVector<std::uint64_t>& sorted_;
   Make make_;
   Bounds local_;
   bool valid_ = false;
-  /// What the last call returned: made_.blocks or listed_.
-  std::span<const detail::CandidateBlock> current_;
+  /// What the last call returned (in listed_).
+  detail::BlockList current_;
 };
 
 /// The narrow phase `settings.method` names. `hints`: see slideWithPlanes

@@ -147,9 +147,9 @@ TEST_CASE("a slide's candidate blocks hold every triangle near each box it asks 
     const Vec3 from(x, 0.5f, 0), to(x + 0.2f, 0.45f, 0);
     const Bounds swept = bspf::sweptBounds(from, to, radii);
     std::set<std::uint32_t> listed;
-    for (const CandidateBlock& block : local.around(world, swept, 0.2f, radii, scratch))
-      for (std::uint32_t bits = bspf::detail::boxMask(block, swept); bits; bits &= bits - 1)
-        listed.insert(local.triangle(block.slot[std::countr_zero(bits)]));
+    for (const CandidateBlock* block : local.around(world, swept, 0.2f, radii, scratch))
+      for (std::uint32_t bits = bspf::detail::boxMask(*block, swept); bits; bits &= bits - 1)
+        listed.insert(local.triangle(block->slot[std::countr_zero(bits)]));
     // Brute force: every triangle whose box overlaps the swept box.
     std::set<std::uint32_t> expected;
     for (std::uint32_t t = 0; t < world.triangles().size(); ++t) {
