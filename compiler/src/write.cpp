@@ -223,7 +223,13 @@ PendingFile::PendingFile(const std::filesystem::path& path) : path_(path) {
   if (const std::string why = notReplaceable(path_); !why.empty())
     throw CompileError("cannot write " + path_.string() + ": " + why);
   for (int attempt = 0; attempt < 16; ++attempt) {
-    temporary_ = path_.parent_path() / ("." + path_.filename().string() + ".tmp-" + randomSuffix());
+    // Appended piece by piece: GCC 12 warns (-Wrestrict, a false positive,
+    // its bug 105329) on "." + std::string&& here.
+    std::string name = ".";
+    name += path_.filename().string();
+    name += ".tmp-";
+    name += randomSuffix();
+    temporary_ = path_.parent_path() / name;
     // Listed before it exists, so a signal never leaves it unlisted.
     slot_ = listTemporary(temporary_.string());
     fd_ = ::open(temporary_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
