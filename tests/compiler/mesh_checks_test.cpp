@@ -126,7 +126,7 @@ TEST_CASE("bspc prints a mesh warning as one line naming the file, and exits 0",
   const std::filesystem::path dir = bspf::test::freshTempDir("mesh-checks");
   const std::filesystem::path obj = dir / "tiny.obj";
   std::ofstream(obj) << "v 0 0 0\nv 0.2 0 0\nv 0 0 0.2\nf 1 3 2\n";
-  const auto r = bspf::test::run("'" + bspf::test::bspcExecutable().string() + "' '" +
+  const auto r = bspf::test::run(std::string("'") + bspf::test::bspcExecutable().string() + "' '" +
                                  obj.string() + "' -o '" + (dir / "tiny.bspf").string() + "' -q");
   INFO("stderr: [" << r.err << "]");
   CHECK(r.status == 0);

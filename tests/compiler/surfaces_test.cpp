@@ -137,7 +137,8 @@ TEST_CASE("surface ids follow their triangles through weld, dropped triangles an
         std::min({corner(world, t, 0).x(), corner(world, t, 1).x(), corner(world, t, 2).x()});
     const int box = static_cast<int>(x / 2 + 0.25f);
     INFO("triangle " << t << ", box " << box);
-    CHECK(world.surfaceName(world.triangleSurface(t)) == "s" + std::to_string(box % 3));
+    CHECK(world.surfaceName(world.triangleSurface(t)) ==
+          std::string("s") + std::to_string(box % 3));
   }
   SECTION("the same input gives the same bytes") {
     CHECK(bspf::test::compile(mesh, settings) == blob);

@@ -127,7 +127,7 @@ TEST_CASE("bspc takes --threads and refuses a count out of range", "[compiler][t
   settings.threads = 1024;
   CHECK_NOTHROW(bspc::validate(settings));
   const auto dir = bspf::test::freshTempDir("threads-cli");
-  const std::string command = "\"" + bspf::test::bspcExecutable().string() + "\" \"" +
+  const std::string command = std::string("\"") + bspf::test::bspcExecutable().string() + "\" \"" +
                               (bspf::test::samplesDir() / "arena.obj").string() + "\" -o \"" +
                               (dir / "out.bspf").string() + "\" -q --threads ";
   const auto bad = bspf::test::run(command + "2000");

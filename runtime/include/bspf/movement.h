@@ -557,8 +557,9 @@ class StepScratch {
   /// grown a little). Diagnostics; valid until the scratch steps again.
   std::size_t lastSlideCandidates() const;
   /// How many candidates the last slide's scans went through, their boxes
-  /// tested 4 at a time before anything else: a short list (at most 48)
-  /// whole, a longer one packed down to lastSlideCandidates(). Diagnostics.
+  /// tested 4 or 8 at a time before anything else: a short list (at most
+  /// 48) whole, of a longer one the 8 of each block of candidates whose box
+  /// overlaps the local box. Diagnostics.
   std::size_t lastSlideScannedLanes() const;
   /// The narrow phases' working lists. Private to the runtime.
   detail::StepWorkspace& workspace();
