@@ -174,10 +174,14 @@ TEST_CASE(
     "the swept-leaf query lists the far side of a split plane that the volume comes within "
     "kSweepMarginMetres of, and not beyond",
     "[runtime][query]") {
-  // The root's split plane of a two-box level; every leaf behind it.
+  // The root's split plane of a two-box level; every leaf behind it. (A
+  // split pays for itself for queries of 1 m: at the default reach, the
+  // level is one leaf.)
   bspc::Mesh mesh = bspf::test::boxMesh({-3, 0, -1}, {-1, 1, 1});
   bspf::test::append(mesh, bspf::test::boxMesh({1, 0, -1}, {3, 1, 1}));
-  const bspf::test::AlignedBytes bytes(bspf::test::compile(mesh));
+  bspc::CompileSettings settings;
+  settings.tree.queryReach = 1;
+  const bspf::test::AlignedBytes bytes(bspf::test::compile(mesh, settings));
   const bspf::World world = *bspf::viewWorld(bytes.span()).world;
   REQUIRE(world.root() >= 0);
   const bspf::schema::Node& root = world.nodes()[world.root()];
