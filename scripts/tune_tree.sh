@@ -4,7 +4,9 @@
 # levels: tree size (references and bytes per triangle) against broad-phase
 # work (leaves and candidate triangles per swept-ellipsoid query, and the
 # median time per query). Prints a Markdown table. Release build expected in
-# ${BUILD:-build}.
+# ${BUILD:-build}. Its queries are one frame's swept body each; the step's
+# own (padded boxes kept for many frames) are measured with the walkers
+# (docs/tree-tuning.md, "Query reach 6 m").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${BUILD:-build}
@@ -16,7 +18,7 @@ trap 'rm -rf "$tmp"' EXIT
 variants=(
   ""
   "--max-leaf-triangles 2" "--max-leaf-triangles 4" "--max-leaf-triangles 16"
-  "--query-reach 0.25" "--query-reach 0.5" "--query-reach 2"
+  "--query-reach 1" "--query-reach 3" "--query-reach 12"
   "--split-weight 0.5" "--split-weight 1" "--split-weight 4" "--split-weight 8"
   "--balance-weight 0" "--balance-weight 2"
   "--candidates axis" "--candidates triangle"
