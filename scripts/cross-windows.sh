@@ -28,6 +28,8 @@ blobs="$build/sample-blobs"
 mkdir -p "$blobs"
 for name in arena box_room slopes; do
   "$bspc" "samples/$name.obj" -o "$blobs/$name.bspf" >/dev/null
+  # compileSampleWithSplits (tests/support/test_support.h)
+  "$bspc" "samples/$name.obj" -o "$blobs/$name.reach1.bspf" --query-reach 1 >/dev/null
 done
 
 cmake -S tests/windows -B "$build" -DCMAKE_BUILD_TYPE=Release \

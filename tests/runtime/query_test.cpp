@@ -103,8 +103,12 @@ void requireNoTouchedTriangleMissed(const bspf::World& world, int sweepCount) {
 
 TEST_CASE("the swept-leaf query lists every triangle a swept ellipsoid touches, on the arena",
           "[runtime][query]") {
-  const bspf::World world = bspf::test::compileSample("arena");
-  requireNoTouchedTriangleMissed(world, 4000);
+  SECTION("default tree") {
+    requireNoTouchedTriangleMissed(bspf::test::compileSample("arena"), 4000);
+  }
+  SECTION("split at 1 m") {
+    requireNoTouchedTriangleMissed(bspf::test::compileSampleWithSplits("arena"), 4000);
+  }
 }
 
 TEST_CASE("the swept-leaf query lists every triangle a swept ellipsoid touches, on a random soup",
@@ -137,7 +141,8 @@ TEST_CASE("the swept-leaf query lists every triangle a swept ellipsoid touches, 
 
 TEST_CASE("the swept-leaf query lists leaves in the order the path passes them",
           "[runtime][query]") {
-  const bspf::World world = bspf::test::compileSample("arena");
+  // At a 1 m reach: five times the default tree's leaves for a path to pass.
+  const bspf::World world = bspf::test::compileSampleWithSplits("arena");
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> unit(0.f, 1.f);
   const Vec3 low = bspf::toVec3(*world.blob().bounds_min());

@@ -324,9 +324,14 @@ bspf::test::CompiledMesh soup() {
 
 TEST_CASE("each scene query gives the brute-force answer on the samples and a random soup",
           "[runtime][query][scene-query]") {
-  for (const std::string name : {"arena", "box_room", "slopes"}) SECTION(name) {
-      checkAllQueries(name, bspf::test::compileSample(name), 3000, 600);
+  for (const std::string name : {"arena", "box_room", "slopes"}) {
+    SECTION(name) { checkAllQueries(name, bspf::test::compileSample(name), 3000, 600); }
+    // The small samples are a leaf or a few at the default reach: at 1 m,
+    // their faces lie in split planes the walk must see across.
+    SECTION(name + ", split at 1 m") {
+      checkAllQueries(name + " (1 m reach)", bspf::test::compileSampleWithSplits(name), 3000, 600);
     }
+  }
   SECTION("soup") {
     const bspf::test::CompiledMesh level = soup();
     REQUIRE(level.world.treeDepth() > 6);
@@ -397,9 +402,10 @@ TEST_CASE("a ray stops at maxDistance: a wall beyond it is a miss, at it a hit",
 
 TEST_CASE("a ray starting on a wall's face, going into the wall, meets that face at distance 0",
           "[runtime][query][scene-query]") {
-  // The room's inner faces lie in the tree's split planes, listed on one
-  // side only: the walk must reach them from the other side too.
-  const bspf::World world = bspf::test::compileSample("box_room");
+  // The room's inner faces lie in the tree's split planes (at a 1 m
+  // reach), listed on one side only: the walk must reach them from the
+  // other side too.
+  const bspf::World world = bspf::test::compileSampleWithSplits("box_room");
   const std::pair<Vec3, Vec3> starts[] = {
       {{3, 1.5f, 0.5f}, {1, 0, 0}},   {{-3, 1.5f, 0.5f}, {-1, 0, 0}}, {{0.5f, 1.5f, 3}, {0, 0, 1}},
       {{0.5f, 1.5f, -3}, {0, 0, -1}}, {{0.5f, 0, 0.5f}, {0, -1, 0}},  {{0.5f, 3, 0.5f}, {0, 1, 0}}};

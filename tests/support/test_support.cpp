@@ -103,19 +103,31 @@ Eigen::Vector3f LevelSampler::inBounds() {
   return low + (high - low).cwiseProduct(Eigen::Vector3f(unit(), unit(), unit()));
 }
 
-bspf::World compileSample(const std::string& name) {
+namespace {
+// samples/NAME.obj compiled with `settings` (in the Windows build, which has
+// no importer, the host's bspc compiled it: scripts/cross-windows.sh, the
+// blob NAME + `suffix` + .bspf).
+bspf::World compiledSample(const std::string& name, const bspc::CompileSettings& settings,
+                           [[maybe_unused]] const std::string& suffix) {
 #ifdef BSPF_SAMPLE_BLOBS_DIR
-  // The Windows build has no importer: the host's bspc compiled the samples
-  // with default settings (scripts/cross-windows.sh).
   const std::filesystem::path blob =
-      std::filesystem::path(BSPF_SAMPLE_BLOBS_DIR) / (name + ".bspf");
+      std::filesystem::path(BSPF_SAMPLE_BLOBS_DIR) / (name + suffix + ".bspf");
 #else
   const std::filesystem::path blob = freshTempDir("sample") / (name + ".bspf");
-  bspc::compileFile(samplesDir() / (name + ".obj"), blob, {});
+  bspc::compileFile(samplesDir() / (name + ".obj"), blob, settings);
 #endif
   bspf::OpenResult opened = bspf::openWorld(blob);
   if (!opened) throw std::runtime_error(opened.message);
   return *opened.world;
+}
+}  // namespace
+
+bspf::World compileSample(const std::string& name) { return compiledSample(name, {}, ""); }
+
+bspf::World compileSampleWithSplits(const std::string& name) {
+  bspc::CompileSettings settings;
+  settings.tree.queryReach = 1;
+  return compiledSample(name, settings, ".reach1");
 }
 
 namespace {

@@ -113,6 +113,12 @@ class LevelSampler {
 /// (tests/windows), opens the host bspc's blob from BSPF_SAMPLE_BLOBS_DIR.
 bspf::World compileSample(const std::string& name);
 
+/// compileSample at a 1 m query reach (bspc's default until the walkers
+/// chose 6 m): a tree with splits even for the small samples, whose faces
+/// then lie in split planes (box_room at 6 m is a single leaf). In the
+/// Windows build, the host bspc's NAME.reach1.bspf.
+bspf::World compileSampleWithSplits(const std::string& name);
+
 /// A fresh empty directory under the system temp dir, removed with
 /// everything in it when the test program exits (kept when the environment
 /// variable BSPF_KEEP_TEST_DIRS is set, for post-mortems).
