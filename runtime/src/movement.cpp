@@ -251,6 +251,7 @@ const char* toString(InvalidInput invalid) {
     case InvalidInput::Radii: return "radii";
     case InvalidInput::Settings: return "settings";
     case InvalidInput::OutOfReach: return "out of reach";
+    case InvalidInput::DeferredPush: return "deferred push";
   }
   return "unknown";
 }
@@ -261,25 +262,29 @@ namespace {
 // of the body phase). It runs twice per body per frame, so it takes no
 // square root: friction only slows the horizontal velocity and the cap only
 // limits it, so the desired end is within (|v| + (|force| + gravity) dt) dt
-// of the position, bounded here with sums of absolute components (never
-// less than the lengths). In float: a sum that overflows is infinite, and
-// fails the bound as it should.
+// of the position (plus the deferred push), bounded here with sums of
+// absolute components (never less than the lengths). In float: a sum that
+// overflows is infinite, and fails the bound as it should.
 InvalidInput checkStepInputs(const Body& body, const Vec3& force, float dt) {
   // One product by zero catches every NaN or infinity at once (it makes a
   // NaN); the checks one by one run only to name the culprit.
-  const float probe = (body.position.sum() + body.velocity.sum() + force.sum() + dt) * 0.0f;
+  const float probe =
+      (body.position.sum() + body.velocity.sum() + force.sum() + body.deferredPush.sum() + dt) *
+      0.0f;
   if (probe != 0.0f || !(dt > 0)) {
     if (!body.position.allFinite()) return InvalidInput::Position;
     if (!body.velocity.allFinite()) return InvalidInput::Velocity;
     if (!force.allFinite()) return InvalidInput::Force;
     if (!(dt > 0) || !std::isfinite(dt)) return InvalidInput::TimeStep;
+    if (!body.deferredPush.allFinite()) return InvalidInput::DeferredPush;
   }
   for (const float r : {body.radii.xz, body.radii.y})
     if (!(r >= kMinBodyRadius && r <= kMaxBodyRadius)) return InvalidInput::Radii;
   if (!settingsInRangeRemembered(body)) return InvalidInput::Settings;
   const float speed =
       body.velocity.cwiseAbs().sum() + (force.cwiseAbs().sum() + body.settings.gravity) * dt;
-  const float reach = body.position.cwiseAbs().maxCoeff() + speed * dt;
+  const float reach =
+      body.position.cwiseAbs().maxCoeff() + speed * dt + body.deferredPush.cwiseAbs().sum();
   if (!(reach <= kMaxBodyCoordinate)) return InvalidInput::OutOfReach;
   return InvalidInput::None;
 }
@@ -322,9 +327,12 @@ InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt
 
   detail::futureVelocity(body, force, dt);
   const Vec3 start = body.position;
+  // The push the body phase carried over moves with the body's own move.
+  const Vec3 move = body.velocity * dt + body.deferredPush;
+  body.deferredPush = Vec3::Zero();
   const float walkableY = walkableNormalY(body.settings);
-  SlideResult slide = slideAgainstLevel(world, start, start + body.velocity * dt, body.radii,
-                                        body.settings, walkableY, scratch, body.groundTriangles);
+  SlideResult slide = slideAgainstLevel(world, start, start + move, body.radii, body.settings,
+                                        walkableY, scratch, body.groundTriangles);
   // A rounded body resting on a step's edge (not walkable ground, but
   // support) may step on as well.
   auto onEdge = [&slide] {
@@ -332,14 +340,14 @@ InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt
                        [](const Contact& c) { return c.edge && c.normal.y() > 0; });
   };
   if (body.settings.maxStepHeight > 0 && (body.grounded || onEdge()))
-    tryStepUp(world, body, start, start + body.velocity * dt, walkableY, scratch, slide);
+    tryStepUp(world, body, start, start + move, walkableY, scratch, slide);
   // Ground snapping, when the move left the ground: nothing below held it.
   // Moving upward means a vertical velocity above 0 after this step's
   // gravity: a jump or a bounce (walking never leaves one; see
   // MovementSettings::maxStepDown). A refused move stays where it was.
   if (body.settings.maxStepDown > 0 && body.grounded && body.velocity.y() <= 0 && !slide.refused &&
       !heldFromBelow(slide))
-    snapToGround(world, body, body.velocity * dt, walkableY, scratch, slide);
+    snapToGround(world, body, move, walkableY, scratch, slide);
   body.position = slide.end;
   detail::respondToContacts(body, slide, dt);
   body.grounded = anyWalkable(slide);

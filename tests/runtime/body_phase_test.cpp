@@ -353,6 +353,55 @@ TEST_CASE(
   }
 }
 
+TEST_CASE(
+    "a body pressed into a wall by another is not pushed into it, and its next step carries "
+    "the push along the wall",
+    "[runtime][movement]") {
+  const bspf::test::CompiledMesh level(yard());
+  const bspf::CollisionMethod method =
+      GENERATE(bspf::CollisionMethod::Planes, bspf::CollisionMethod::ExactSweep);
+  INFO((method == bspf::CollisionMethod::Planes ? "planes" : "exact"));
+  // The yard's east wall has its face at x = 5. The body at the wall rests
+  // 2 mm from it; the other overlaps it from the west and the south, so the
+  // push on it points east (into the wall) and north (along it).
+  std::vector<Body> bodies(2);
+  for (Body& b : bodies) b.settings.method = method;
+  const float wallX = 5, clear = wallX - bodies[0].radii.xz;
+  bodies[0].position = Vec3(clear - 0.002f, 0.851f, 0);
+  bodies[1].position = bodies[0].position - Vec3(0.5f, 0, 0.4f);
+  const std::vector<Body> start = bodies;
+  const std::vector<Vec3> forces(2, Vec3::Zero());
+  std::vector<bspf::StepReport> reports(2);
+  bspf::StepScratch scratch;
+  bspf::stepBodies(level.world, bodies, forces, kDt, scratch, reports);
+  REQUIRE(reports[0].bodyContacts == 1);
+  REQUIRE(reports[1].bodyContacts == 1);
+  // The other, on open floor, is pushed away at once; the one at the wall
+  // keeps its place and carries its push, east and north.
+  REQUIRE(bodies[1].deferredPush == Vec3::Zero());
+  REQUIRE(bodies[1].position.x() < start[1].position.x() - 0.05f);
+  REQUIRE(bodies[1].position.z() < start[1].position.z() - 0.05f);
+  const Vec3 carried = bodies[0].deferredPush;
+  REQUIRE(carried.x() > 0.05f);
+  REQUIRE(carried.z() > 0.05f);
+  REQUIRE(carried.y() == 0);
+  REQUIRE(bodies[0].position.x() <= clear);
+  // The next step moves it north along the wall by the carried push, never
+  // into the wall, and spends it.
+  const Vec3 before = bodies[0].position;
+  bspf::stepBodies(level.world, bodies, forces, kDt, scratch, reports);
+  REQUIRE(bodies[0].position.x() <= clear);
+  REQUIRE(bodies[0].position.z() > before.z() + 0.9f * carried.z());
+  REQUIRE(bodies[0].deferredPush.x() >= 0);  // pushed again, if at all, into the wall
+  // The pair parts within a few frames, the body at the wall never entering it.
+  for (int frame = 0; frame < 30; ++frame) {
+    bspf::stepBodies(level.world, bodies, forces, kDt, scratch, reports);
+    REQUIRE(bodies[0].position.x() <= clear);
+  }
+  REQUIRE(reports[0].bodyContacts == 0);
+  REQUIRE(bodies[0].deferredPush == Vec3::Zero());
+}
+
 namespace {
 
 // Bodies of the default shape (radii 0.45 and 0.85) standing on a 400 m

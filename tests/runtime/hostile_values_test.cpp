@@ -89,6 +89,12 @@ const std::vector<Hostile>& hostileInputs() {
        [](Body& b, Vec3&, float&) { b.position.x() = 2e6f; }},
       {"a huge finite gravity", InvalidInput::OutOfReach,
        [](Body& b, Vec3&, float&) { b.settings.gravity = 1e38f; }},
+      {"NaN deferred push", InvalidInput::DeferredPush,
+       [](Body& b, Vec3&, float&) { b.deferredPush.y() = kNaN; }},
+      {"infinite deferred push", InvalidInput::DeferredPush,
+       [](Body& b, Vec3&, float&) { b.deferredPush.x() = -kInf; }},
+      {"a deferred push beyond kMaxBodyCoordinate", InvalidInput::OutOfReach,
+       [](Body& b, Vec3&, float&) { b.deferredPush.z() = 3e6f; }},
   };
   return cases;
 }
