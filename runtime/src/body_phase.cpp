@@ -373,14 +373,23 @@ void BodyGrid::sweepPairsBySorting() {
 void BodyGrid::sweep(std::span<const Body> bodies) {
   stops_.clear();
   const std::size_t n = bodies.size();
-  // Whether a body's move, over its radii, is longer than kSweepMinMove:
-  // (x / a)^2 + (y / b)^2 + (z / a)^2 > k^2, multiplied out (no division:
-  // this runs for every body every frame, and most frames have no fast body).
+  // Whether a body's move, over its radii, is longer than kSweepMinMove
+  // plus the push it carried (Body::lastStepPush, over its radii, in the same
+  // space): (x / a)^2 + (y / b)^2 + (z / a)^2 > (k + p)^2, multiplied out
+  // (no division or root but for a carried push: this runs for every body
+  // every frame, and most frames have no fast body). Not the move less the
+  // push: a push is carried when it presses the body into a wall, and the
+  // wall takes most of it back.
   auto isFast = [](const Body& b) {
     const Vec3 move = b.position - b.lastStepStart;
     const float a2 = b.radii.xz * b.radii.xz, b2 = b.radii.y * b.radii.y;
+    float least = kSweepMinMove;
+    if (b.lastStepPush != Vec3::Zero()) {
+      const Vec3& p = b.lastStepPush;
+      least += std::sqrt((p.x() * p.x() + p.z() * p.z()) / a2 + p.y() * p.y() / b2);
+    }
     return (move.x() * move.x() + move.z() * move.z()) * b2 + move.y() * move.y() * a2 >
-           kSweepMinMove * kSweepMinMove * a2 * b2;
+           least * least * a2 * b2;
   };
   if (std::none_of(bodies.begin(), bodies.end(), isFast)) return;
   movers_.resize(n);

@@ -319,6 +319,7 @@ InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt
   if (report) clearReport(*report);
   // Where the body phase's sweep starts this body's move from.
   body.lastStepStart = body.position;
+  body.lastStepPush = Vec3::Zero();
   if (const InvalidInput invalid = checkStepInputs(body, force, dt);
       invalid != InvalidInput::None) {
     if (report) report->invalidInput = invalid;
@@ -329,6 +330,7 @@ InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt
   const Vec3 start = body.position;
   // The push the body phase carried over moves with the body's own move.
   const Vec3 move = body.velocity * dt + body.deferredPush;
+  body.lastStepPush = body.deferredPush;
   body.deferredPush = Vec3::Zero();
   const float walkableY = walkableNormalY(body.settings);
   SlideResult slide = slideAgainstLevel(world, start, start + move, body.radii, body.settings,

@@ -393,6 +393,9 @@ TEST_CASE(
   REQUIRE(bodies[0].position.x() <= clear);
   REQUIRE(bodies[0].position.z() > before.z() + 0.9f * carried.z());
   REQUIRE(bodies[0].deferredPush.x() >= 0);  // pushed again, if at all, into the wall
+  // The step says what it carried (the sweep allows for it).
+  REQUIRE(bodies[0].lastStepPush == carried);
+  REQUIRE(bodies[1].lastStepPush == Vec3::Zero());
   // The pair parts within a few frames, the body at the wall never entering it.
   for (int frame = 0; frame < 30; ++frame) {
     bspf::stepBodies(level.world, bodies, forces, kDt, scratch, reports);

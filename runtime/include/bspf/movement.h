@@ -212,6 +212,13 @@ struct Body {
   /// sets it back to zero. Zero for a body no push reached the level with.
   /// Part of the body's state: a game that replays steps keeps it too.
   Vec3 deferredPush = Vec3::Zero();
+  /// Metres: the deferredPush the body's last step carried (zero if none;
+  /// set by the step, as lastStepStart is). The body phase's sweep allows
+  /// for it when it asks whether the body's move was fast (kSweepMinMove): a
+  /// push answers bodies the body already overlaps, and pushes were never
+  /// swept (counted, they made a pile of 1,024 walkers sweep most of its
+  /// bodies, on one thread).
+  Vec3 lastStepPush = Vec3::Zero();
 };
 
 /// The most contacts a StepReport keeps.
@@ -301,7 +308,8 @@ inline constexpr int kMaxBodyCandidates = 32;
 
 /// The body-against-body sweep (BodyGrid::build) sweeps a body against the
 /// others when its move this step, in its own unit-sphere space (each axis
-/// over its radius), is longer than this: 0.5, 22 cm for the default body
+/// over its radius), is longer than this plus the push it carried
+/// (Body::lastStepPush, in the same space): 0.5, 22 cm for the default body
 /// (13.5 m/s at 60 frames a second). Two slower bodies cannot cross each
 /// other's centre in one step (their relative move is at most half their
 /// summed extent), so the push alone keeps them apart on the right sides.
