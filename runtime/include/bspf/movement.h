@@ -519,11 +519,10 @@ class BodyGrid {
   /// Low x's ordered bits << 32 | body, sorted; kept for the next sweep.
   std::vector<std::uint64_t> sweepOrder_;
   /// A mover's box and whether it is fast, in sweepOrder_'s order.
-  struct SweepBox {
-    float lowX, highX, lowY, highY, lowZ, highZ;
-    std::uint32_t body, fast;
-  };
-  std::vector<SweepBox> sweepBoxes_;
+  /// The sorted sweep's boxes in x order (detail::SortedBoxes): the six
+  /// bounds' arrays, then the bodies' and their fast flags'.
+  std::vector<float> sweepBounds_;
+  std::vector<std::uint32_t> sweepBodies_;
   std::vector<std::uint32_t> oversize_;  ///< fast bodies of more than kMaxSweepPieces pieces
   /// The last build found the pairs by sorting (findNeighboursBySorting):
   /// entries_ are by body index, places_ and the cells unused.

@@ -1,0 +1,134 @@
+// SPDX-License-Identifier: MIT
+// The sorted sweep's pair scan (private: runtime/src/box_pairs.h): the
+// four-at-a-time scan the body phase uses must find the same pairs, in the
+// same order, as the one-box-at-a-time reference, and the reference every
+// pair of meeting boxes with a fast body.
+#include "box_pairs.h"
+
+#include <algorithm>
+#include <bit>
+#include <catch2/catch.hpp>
+#include <cstdint>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace {
+
+constexpr float kInfinity = std::numeric_limits<float>::infinity();
+
+// `count` boxes in x order as the sweep lays them out (SortedBoxes), with
+// the kBoxRun boxes after them that meet nothing.
+struct Boxes {
+  std::vector<float> lowX, highX, lowY, highY, lowZ, highZ;
+  std::vector<std::uint32_t> body, fast;
+
+  bspf::detail::SortedBoxes view() const {
+    return {lowX.data(),  highX.data(), lowY.data(),
+            highY.data(), lowZ.data(),  highZ.data(),
+            body.data(),  fast.data(),  std::uint32_t(body.size() - bspf::detail::kBoxRun)};
+  }
+};
+
+// Random boxes: clustered so that runs along x are often longer than
+// kBoxRun, some sharing a face (touching must count), some slow pairs,
+// some bounds infinite or NaN. Sorted by low x as the sweep sorts them (a
+// float's bits, sign-flipped).
+Boxes randomBoxes(std::mt19937& rng, int count) {
+  std::uniform_real_distribution<float> centre(-6, 6), size(0.1f, 2.5f), unit(0, 1);
+  struct Box {
+    float low[3], high[3];
+    std::uint32_t body, fast;
+  };
+  std::vector<Box> boxes;
+  for (int i = 0; i < count; ++i) {
+    Box b;
+    for (int axis = 0; axis < 3; ++axis) {
+      b.low[axis] = centre(rng);
+      b.high[axis] = b.low[axis] + size(rng);
+    }
+    if (i > 0 && unit(rng) < 0.2f) {  // touching the last box along one axis
+      const int axis = int(unit(rng) * 2.99f);
+      b.low[axis] = boxes.back().high[axis];
+    }
+    const float odd = unit(rng);
+    if (odd < 0.03f)
+      b.high[0] = kInfinity;
+    else if (odd < 0.06f)
+      b.low[2] = -kInfinity;
+    else if (odd < 0.08f)
+      b.high[1] = std::numeric_limits<float>::quiet_NaN();
+    else if (odd < 0.10f)
+      b.low[0] = std::numeric_limits<float>::quiet_NaN();
+    b.body = std::uint32_t(i);
+    b.fast = unit(rng) < 0.6f ? ~0u : 0u;
+    boxes.push_back(b);
+  }
+  auto key = [](float x) {
+    const std::uint32_t bits = std::bit_cast<std::uint32_t>(x);
+    return bits >> 31 ? ~bits : bits | 0x80000000u;
+  };
+  std::sort(boxes.begin(), boxes.end(), [&](const Box& a, const Box& b) {
+    return key(a.low[0]) != key(b.low[0]) ? key(a.low[0]) < key(b.low[0]) : a.body < b.body;
+  });
+  Boxes out;
+  for (const Box& b : boxes) {
+    out.lowX.push_back(b.low[0]), out.highX.push_back(b.high[0]);
+    out.lowY.push_back(b.low[1]), out.highY.push_back(b.high[1]);
+    out.lowZ.push_back(b.low[2]), out.highZ.push_back(b.high[2]);
+    out.body.push_back(b.body), out.fast.push_back(b.fast);
+  }
+  for (std::uint32_t k = 0; k < bspf::detail::kBoxRun; ++k) {
+    out.lowX.push_back(kInfinity), out.highX.push_back(-kInfinity);
+    out.lowY.push_back(kInfinity), out.highY.push_back(-kInfinity);
+    out.lowZ.push_back(kInfinity), out.highZ.push_back(-kInfinity);
+    out.body.push_back(0), out.fast.push_back(0);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("the four-at-a-time pair scan finds the pairs the one-by-one scan finds, in its order",
+          "[runtime][movement]") {
+  std::mt19937 rng(20261128);
+  for (int trial = 0; trial < 400; ++trial) {
+    const int count = trial % 70;
+    const Boxes boxes = randomBoxes(rng, count);
+    INFO("trial " << trial << ", " << count << " boxes");
+    std::vector<std::uint64_t> fourAtATime, oneByOne;
+    bspf::detail::appendMeetingPairs(boxes.view(), fourAtATime);
+    bspf::detail::appendMeetingPairsOneByOne(boxes.view(), oneByOne);
+    REQUIRE(fourAtATime == oneByOne);
+  }
+}
+
+TEST_CASE("the one-by-one pair scan finds every pair of meeting boxes with a fast body",
+          "[runtime][movement]") {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 200; ++trial) {
+    const int count = trial % 50;
+    const Boxes boxes = randomBoxes(rng, count);
+    INFO("trial " << trial << ", " << count << " boxes");
+    std::vector<std::uint64_t> found;
+    bspf::detail::appendMeetingPairsOneByOne(boxes.view(), found);
+    std::sort(found.begin(), found.end());
+    // Every pair, tested as boxesMeet tests: closed intervals, and NaN
+    // bounds meeting nothing.
+    std::vector<std::uint64_t> expected;
+    for (int i = 0; i < count; ++i)
+      for (int j = i + 1; j < count; ++j) {
+        auto meets = [&](const std::vector<float>& low, const std::vector<float>& high) {
+          return low[i] <= high[j] && low[j] <= high[i];
+        };
+        if ((boxes.fast[i] | boxes.fast[j]) != 0 && meets(boxes.lowX, boxes.highX) &&
+            meets(boxes.lowY, boxes.highY) && meets(boxes.lowZ, boxes.highZ)) {
+          const std::uint32_t a = std::min(boxes.body[i], boxes.body[j]),
+                              b = std::max(boxes.body[i], boxes.body[j]);
+          expected.push_back(std::uint64_t(a) << 32 | b);
+        }
+      }
+    std::sort(expected.begin(), expected.end());
+    REQUIRE(found == expected);
+  }
+}
