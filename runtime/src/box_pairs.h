@@ -13,8 +13,8 @@ namespace bspf::detail {
 /// +infinity and meet nothing, so the scan reads whole runs of this many.
 inline constexpr std::uint32_t kBoxRun = 4;
 
-/// Boxes sorted by low x, as arrays of `count + kBoxRun` (the last kBoxRun
-/// the ones that meet nothing: SortedBoxes::endWith).
+/// Boxes sorted by low x, as arrays of `count + kBoxRun` entries: the last
+/// kBoxRun low bounds +infinity, high bounds -infinity, not fast.
 struct SortedBoxes {
   const float *lowX, *highX, *lowY, *highY, *lowZ, *highZ;
   const std::uint32_t* body;  ///< the box's body index

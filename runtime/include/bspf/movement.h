@@ -518,7 +518,6 @@ class BodyGrid {
   std::vector<std::uint64_t> sweepPairs_;                            ///< a << 32 | b, a < b
   /// Low x's ordered bits << 32 | body, sorted; kept for the next sweep.
   std::vector<std::uint64_t> sweepOrder_;
-  /// A mover's box and whether it is fast, in sweepOrder_'s order.
   /// The sorted sweep's boxes in x order (detail::SortedBoxes): the six
   /// bounds' arrays, then the bodies' and their fast flags'.
   std::vector<float> sweepBounds_;
