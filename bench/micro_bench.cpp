@@ -15,7 +15,14 @@
 //   PlanesMask          the planes method's box test and pre-check of one
 //                       block of 8 candidates (workspace.h), on each path the
 //                       CPU runs: one lane at a time, SSE, AVX;
-//   StepBody            a whole stepBody, for each method.
+//   StepBody            a whole stepBody, for each method;
+//   BodyGridBuild       the body phase's broad phase (BodyGrid::build: the
+//                       sweep, then the neighbour pairs) for one frame of the
+//                       crowd at 6 and at 40 m/s, as the level phase left it
+//                       (64 bodies: the time over 64 is per body);
+//   MeetingPairs        the sorted sweep's pair scan (box_pairs.h) over one
+//                       frame's 64 swept boxes at 40 m/s, four boxes at a
+//                       time (SSE2) and one by one.
 // The inputs are realistic and deterministic: the states of the `walkers`
 // crowd (samples/walkers_sim.h: 64 agents walking at 6 m/s, dt 1/60, radii
 // 0.45/0.85) on samples/arena.obj, compiled in memory, and on
@@ -35,12 +42,15 @@
 #include <exception>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "box_pairs.h"
 #include "narrow_phase.h"
 #include "stored_box.h"
 #include "support/mesh_blob.h"
@@ -93,6 +103,9 @@ struct Level {
   std::vector<PreCheckInput> preChecks;
   std::vector<PointInput> points;
   std::vector<SweepInput> sweeps;
+  /// Frames of the crowd after its level phase (stepBodiesAgainstLevel),
+  /// as the body phase takes them, walking at 6 m/s and running at 40.
+  std::vector<std::vector<Body>> walkingFrames, runningFrames;
 };
 
 // Every 8th body state of frames 30 to 630 of the walkers crowd (after the
@@ -112,6 +125,25 @@ std::vector<BodyState> crowdStates(const World& world, std::span<const Vec3> spa
         if (n++ % 8 == 0) states.push_back({bodies[i], forces[i]});
     });
   return states;
+}
+
+// Frames 30 to 330 of the walkers crowd at `speed` m/s, each after its
+// level phase: the bodies as BodyGrid::build gets them.
+std::vector<std::vector<Body>> crowdFrames(const World& world, std::span<const Vec3> spawns,
+                                           float speed) {
+  bspf::walkers::Options options;
+  options.speed = speed;
+  const std::vector<Vec3> starts = bspf::walkers::startsFromSpawns(spawns, options.agents);
+  bspf::walkers::Simulation crowd(world, starts, options);
+  std::vector<std::vector<Body>> frames;
+  bspf::StepScratch scratch;
+  for (int frame = 0; frame < 330; ++frame)
+    crowd.step([&](std::span<const Body> bodies, std::span<const Vec3> forces) {
+      if (frame < 30) return;
+      std::vector<Body>& moved = frames.emplace_back(bodies.begin(), bodies.end());
+      bspf::stepBodiesAgainstLevel(world, moved, forces, options.dt, scratch);
+    });
+  return frames;
 }
 
 // The move stepBody asks of the level in state `s`: one frame of its walk
@@ -202,6 +234,8 @@ std::unique_ptr<Level> loadLevel(const std::filesystem::path& base) {
   }
   level->planesStates = crowdStates(level->world(), spawns.points, CollisionMethod::Planes);
   level->exactStates = crowdStates(level->world(), spawns.points, CollisionMethod::ExactSweep);
+  level->walkingFrames = crowdFrames(level->world(), spawns.points, 6);
+  level->runningFrames = crowdFrames(level->world(), spawns.points, 40);
   gatherInputs(*level);
   return level;
 }
@@ -368,6 +402,91 @@ void stepBody(benchmark::State& state, const Level& level, CollisionMethod metho
         });
 }
 
+// BodyGrid::build on one frame per iteration; items are bodies.
+void bodyGridBuild(benchmark::State& state, const std::vector<std::vector<Body>>& frames) {
+  bspf::BodyGrid grid;
+  std::size_t bodies = 0;
+  cycle(state, frames, [&](const std::vector<Body>& frame) {
+    grid.build(frame);
+    benchmark::ClobberMemory();
+    bodies += frame.size();
+  });
+  state.SetItemsProcessed(std::int64_t(bodies));
+}
+
+// The sorted sweep's pair scan on one frame's swept boxes per iteration:
+// each body's box from its step's start to its end, grown by its radii and
+// skin, sorted by low x, and marked fast when its move is longer than
+// kSweepMinMove in its own unit-sphere space (as BodyGrid::sweep builds
+// them; carried pushes left out).
+void meetingPairs(benchmark::State& state, const std::vector<std::vector<Body>>& frames,
+                  bool fourAtATime) {
+  struct Boxes {
+    std::vector<float> bounds;  // lowX, highX, lowY, highY, lowZ, highZ
+    std::vector<std::uint32_t> body, fast;
+    bspf::detail::SortedBoxes sorted;
+  };
+  std::vector<Boxes> inputs(frames.size());
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    const std::vector<Body>& frame = frames[f];
+    const std::uint32_t n = std::uint32_t(frame.size()), stride = n + bspf::detail::kBoxRun;
+    std::vector<std::uint32_t> order(n);
+    for (std::uint32_t i = 0; i < n; ++i) order[i] = i;
+    auto low = [&](const Body& b) {
+      const float reach = b.radii.xz + b.settings.skin;
+      return std::min(b.lastStepStart.x(), b.position.x()) - reach;
+    };
+    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return std::make_pair(low(frame[a]), a) < std::make_pair(low(frame[b]), b);
+    });
+    Boxes& in = inputs[f];
+    constexpr float kInfinity = std::numeric_limits<float>::infinity();
+    in.bounds.assign(6 * std::size_t(stride), 0);
+    for (std::uint32_t k = 0; k < 6; ++k)
+      std::fill_n(in.bounds.begin() + k * stride + n, bspf::detail::kBoxRun,
+                  k % 2 == 0 ? kInfinity : -kInfinity);
+    in.body.assign(stride, 0);
+    in.fast.assign(stride, 0);
+    for (std::uint32_t k = 0; k < n; ++k) {
+      const Body& b = frame[order[k]];
+      const Vec3 reach(b.radii.xz + b.settings.skin, b.radii.y + b.settings.skin,
+                       b.radii.xz + b.settings.skin);
+      const Vec3 lo = b.lastStepStart.cwiseMin(b.position) - reach,
+                 hi = b.lastStepStart.cwiseMax(b.position) + reach;
+      for (int axis = 0; axis < 3; ++axis) {
+        in.bounds[(2 * axis) * stride + k] = lo[axis];
+        in.bounds[(2 * axis + 1) * stride + k] = hi[axis];
+      }
+      const Vec3 move =
+          (b.position - b.lastStepStart).cwiseQuotient(Vec3(b.radii.xz, b.radii.y, b.radii.xz));
+      in.body[k] = order[k];
+      in.fast[k] = move.norm() > bspf::kSweepMinMove ? ~0u : 0u;
+    }
+    const float* bounds = in.bounds.data();
+    in.sorted = {bounds,
+                 bounds + stride,
+                 bounds + 2 * stride,
+                 bounds + 3 * stride,
+                 bounds + 4 * stride,
+                 bounds + 5 * stride,
+                 in.body.data(),
+                 in.fast.data(),
+                 n};
+  }
+  std::vector<std::uint64_t> pairs;
+  std::size_t found = 0;
+  cycle(state, inputs, [&](const Boxes& in) {
+    pairs.clear();
+    if (fourAtATime)
+      bspf::detail::appendMeetingPairs(in.sorted, pairs);
+    else
+      bspf::detail::appendMeetingPairsOneByOne(in.sorted, pairs);
+    benchmark::DoNotOptimize(pairs.data());
+    found += pairs.size();
+  });
+  state.counters["pairs"] = benchmark::Counter(double(found) / double(state.iterations()));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -414,6 +533,14 @@ int main(int argc, char** argv) {
                                  CollisionMethod::Planes);
     benchmark::RegisterBenchmark(("StepBody/exact" + suffix).c_str(), stepBody, std::cref(level),
                                  CollisionMethod::ExactSweep);
+    benchmark::RegisterBenchmark(("BodyGridBuild/6ms" + suffix).c_str(), bodyGridBuild,
+                                 std::cref(level.walkingFrames));
+    benchmark::RegisterBenchmark(("BodyGridBuild/40ms" + suffix).c_str(), bodyGridBuild,
+                                 std::cref(level.runningFrames));
+    benchmark::RegisterBenchmark(("MeetingPairs/sse" + suffix).c_str(), meetingPairs,
+                                 std::cref(level.runningFrames), true);
+    benchmark::RegisterBenchmark(("MeetingPairs/one_by_one" + suffix).c_str(), meetingPairs,
+                                 std::cref(level.runningFrames), false);
   }
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
