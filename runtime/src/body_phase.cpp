@@ -780,8 +780,9 @@ bool touchesNothing(const World& world, const Vec3& from, const Vec3& to, Ellips
   if (planesMade || cache.exact.madeFrom(nearby, radii)) {
     const auto& blocks = planesMade ? cache.planes.blocks : cache.exact.blocks;
     const auto& triangles = planesMade ? cache.planes.triangles : cache.exact.triangles;
+    const detail::BlockBoxTest boxTest(box);
     for (const detail::CandidateBlock& block : blocks) {
-      if (!boxesOverlap(block.low, block.high, box.low, box.high)) continue;
+      if (!boxTest.meets(block)) continue;
       for (std::uint32_t lanes = detail::boxMask(block, box); lanes != 0; lanes &= lanes - 1) {
         const int lane = std::countr_zero(lanes);
         // The exact sweep's lanes hold a padded extent: for them, the plane

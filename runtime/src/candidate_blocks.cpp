@@ -52,7 +52,6 @@ std::uint32_t scalarMask(const CandidateBlock& block, const Bounds& box, const V
 template <Check check>
 std::uint32_t sseMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
                       const Vec3& end, LaneSides* sides) {
-  if (!boxesOverlap(block.low, block.high, box.low, box.high)) return 0;
   const __m128 lx = _mm_set1_ps(box.low.x()), ly = _mm_set1_ps(box.low.y()),
                lz = _mm_set1_ps(box.low.z());
   const __m128 hx = _mm_set1_ps(box.high.x()), hy = _mm_set1_ps(box.high.y()),
@@ -101,7 +100,6 @@ template <Check check>
 __attribute__((target("avx"))) std::uint32_t avxMask(const CandidateBlock& block, const Bounds& box,
                                                      const Vec3& start, const Vec3& end,
                                                      LaneSides* sides) {
-  if (!boxesOverlap(block.low, block.high, box.low, box.high)) return 0;
   static_assert(kBlockLanes == 8 && alignof(CandidateBlock) >= 32 && alignof(LaneSides) >= 32);
   // (No lambdas: they would not be compiled for AVX.)
   __m256 keep = _mm256_and_ps(

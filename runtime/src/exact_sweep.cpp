@@ -461,8 +461,10 @@ void recoverFromPenetration(const World& world, Vec3& p, const Vec3& toSphere, f
     const Vec3 centre = p.cwiseQuotient(toSphere);
     const Bounds here = sweptBounds(centre, centre, radii);
     bool pushed = false;
+    const detail::BlockBoxTest boxTest(here);
     for (const detail::CandidateBlock* const block :
          local.around(world, here, moveLength, radii, scratch)) {
+      if (!boxTest.meets(*block)) continue;
       for (std::uint32_t bits = detail::boxMask(*block, here); bits != 0; bits &= bits - 1) {
         const std::uint32_t slot = block->slot[std::countr_zero(bits)];
         const detail::TriangleD& triangle = local.made(slot).sphere;
@@ -524,8 +526,10 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     // ground, the face under the body settles its neighbours.
     open.clear();
     const detail::SpherePath path(p, move);
+    const detail::BlockBoxTest boxTest(swept);
     for (const detail::CandidateBlock* const block :
          local.around(world, swept, moveLength, radii, scratch, desiredEnd - start)) {
+      if (!boxTest.meets(*block)) continue;
       for (std::uint32_t bits = exactMask(*block, swept, from, to); bits != 0; bits &= bits - 1) {
         const std::uint32_t slot = block->slot[std::countr_zero(bits)];
         const float before = impact.time;  // every new impact is earlier

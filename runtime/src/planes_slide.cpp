@@ -101,8 +101,10 @@ void findBlockingTriangle(const World& world, const Move& move, const Bounds& sw
                           detail::BlockList blocks, detail::PlanesMaskFunction planesMask,
                           Hit& best) {
   detail::LaneSides sides;
+  const detail::BlockBoxTest boxTest(swept);
   for (const detail::CandidateBlock* const listed : blocks) {
     const detail::CandidateBlock& block = *listed;
+    if (!boxTest.meets(block)) continue;
     // The cheap tests for the whole block at once (the box, then the
     // pre-check's two dot products, whose values it keeps); the six planes
     // only for the few lanes that pass (about 4 a scan on the shared

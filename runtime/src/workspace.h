@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -147,8 +148,49 @@ struct alignas(32) CandidateBlock {
   /// Index of the candidate in MadeCandidates::cold.
   std::uint32_t slot[kBlockLanes];
   /// The box around every used lane's box (sealBlock): a scan skips a
-  /// block whose box misses its own with one scalar test.
+  /// block whose box misses its own (BlockBoxTest).
   Vec3 low, high;
+  /// Read with `high` by BlockBoxTest's four-lane loads, its lane ignored:
+  /// set, so that no load reads uninitialised bytes.
+  float afterHigh = 0;
+};
+
+/// The test a scan makes of each block before its mask: whether the
+/// block's box overlaps `box` (touching counts), as boxesOverlap. With SSE,
+/// each box in one four-lane load (a block's low and high are adjacent) and
+/// the query's box prepared once a scan: a third of the instructions of six
+/// scalar comparisons and their branches, which ran in every mask call
+/// (walkers at 40 m/s on oa_dm5: 382,000 mask calls, 39% of them for
+/// blocks whose box misses).
+class BlockBoxTest {
+ public:
+  explicit BlockBoxTest(const Bounds& box)
+#ifdef BSPF_SSE_MASKS
+      : low_(_mm_setr_ps(box.low.x(), box.low.y(), box.low.z(), 0)),
+        high_(_mm_setr_ps(box.high.x(), box.high.y(), box.high.z(), 0))
+#else
+      : box_(box)
+#endif
+  {
+  }
+  bool meets(const CandidateBlock& block) const {
+#ifdef BSPF_SSE_MASKS
+    static_assert(offsetof(CandidateBlock, high) == offsetof(CandidateBlock, low) + 12 &&
+                  offsetof(CandidateBlock, afterHigh) == offsetof(CandidateBlock, high) + 12);
+    const __m128 low = _mm_loadu_ps(block.low.data()), high = _mm_loadu_ps(block.high.data());
+    const __m128 overlap = _mm_and_ps(_mm_cmple_ps(low, high_), _mm_cmple_ps(low_, high));
+    return (_mm_movemask_ps(overlap) & 7) == 7;
+#else
+    return boxesOverlap(block.low, block.high, box_.low, box_.high);
+#endif
+  }
+
+ private:
+#ifdef BSPF_SSE_MASKS
+  __m128 low_, high_;
+#else
+  Bounds box_;
+#endif
 };
 
 /// Sets `block`'s box from its used lanes. Call once its lanes are written;
@@ -238,7 +280,10 @@ inline float laneSide(const CandidateBlock& block, int lane, const Vec3& p) {
          block.distance[lane];
 }
 
-/// Bit i set when lane i's box overlaps `box` (touching counts).
+/// Bit i set when lane i's box overlaps `box` (touching counts). This mask
+/// and the two below test every lane, whatever the block's own box: a scan
+/// passes over the blocks whose box misses with BlockBoxTest first (in the
+/// masks, that test ran again for every block that passed it).
 std::uint32_t boxMask(const CandidateBlock& block, const Bounds& box);
 /// The side values planesMask computed: lane i's signed distances, metres,
 /// of the move's start and end to its face plane. Valid for the lanes whose
