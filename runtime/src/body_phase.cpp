@@ -202,6 +202,36 @@ bool boxesMeet(const Vec3& lowA, const Vec3& highA, const Vec3& lowB, const Vec3
   return (lowA.array() <= highB.array()).all() && (lowB.array() <= highA.array()).all();
 }
 
+// Whether a body's move, over its radii, is longer than kSweepMinMove plus
+// the push it carried (Body::lastStepPush, over its radii, in the same
+// space): (x / a)^2 + (y / b)^2 + (z / a)^2 > (k + p)^2, multiplied out (no
+// division or root but for a carried push: this runs for every body every
+// frame, and most frames have no fast body). Not the move less the push: a
+// push is carried when it presses the body into a wall, and the wall takes
+// most of it back.
+bool movedFast(const Body& b) {
+  const Vec3 move = b.position - b.lastStepStart;
+  const float a2 = b.radii.xz * b.radii.xz, b2 = b.radii.y * b.radii.y;
+  float least = kSweepMinMove;
+  if (b.lastStepPush != Vec3::Zero()) {
+    const Vec3& p = b.lastStepPush;
+    least += std::sqrt((p.x() * p.x() + p.z() * p.z()) / a2 + p.y() * p.y() / b2);
+  }
+  return (move.x() * move.x() + move.z() * move.z()) * b2 + move.y() * move.y() * a2 >
+         least * least * a2 * b2;
+}
+
+// Whether movedFast(b) is false because the move is shorter than
+// kSweepMinMove times the smaller radius, to spare 1% for rounding (a carried
+// push only makes a move less fast): half the instructions, for the bodies
+// of nearly every frame.
+bool movedSurelySlow(const Body& b) {
+  constexpr float kSlowSquared = 0.99f * kSweepMinMove * kSweepMinMove;
+  const Vec3 move = b.position - b.lastStepStart;
+  const float radius = std::min(b.radii.xz, b.radii.y);
+  return move.squaredNorm() <= kSlowSquared * (radius * radius);
+}
+
 }  // namespace
 
 double BodyGrid::meetTime(std::uint32_t a, std::uint32_t b, Vec3& normal) const {
@@ -422,28 +452,10 @@ void appendMeetingPairs(const SortedBoxes& boxes, std::vector<std::uint64_t>& pa
 
 }  // namespace detail
 
-void BodyGrid::sweep(std::span<const Body> bodies) {
+void BodyGrid::sweep(std::span<const Body> bodies, bool anyFast) {
   stops_.clear();
+  if (!anyFast) return;
   const std::size_t n = bodies.size();
-  // Whether a body's move, over its radii, is longer than kSweepMinMove
-  // plus the push it carried (Body::lastStepPush, over its radii, in the same
-  // space): (x / a)^2 + (y / b)^2 + (z / a)^2 > (k + p)^2, multiplied out
-  // (no division or root but for a carried push: this runs for every body
-  // every frame, and most frames have no fast body). Not the move less the
-  // push: a push is carried when it presses the body into a wall, and the
-  // wall takes most of it back.
-  auto isFast = [](const Body& b) {
-    const Vec3 move = b.position - b.lastStepStart;
-    const float a2 = b.radii.xz * b.radii.xz, b2 = b.radii.y * b.radii.y;
-    float least = kSweepMinMove;
-    if (b.lastStepPush != Vec3::Zero()) {
-      const Vec3& p = b.lastStepPush;
-      least += std::sqrt((p.x() * p.x() + p.z() * p.z()) / a2 + p.y() * p.y() / b2);
-    }
-    return (move.x() * move.x() + move.z() * move.z()) * b2 + move.y() * move.y() * a2 >
-           least * least * a2 * b2;
-  };
-  if (std::none_of(bodies.begin(), bodies.end(), isFast)) return;
   movers_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const Body& b = bodies[i];
@@ -455,7 +467,7 @@ void BodyGrid::sweep(std::span<const Body> bodies) {
     const Vec3 reach(b.radii.xz + m.skin, b.radii.y + m.skin, b.radii.xz + m.skin);
     m.low = m.start.cwiseMin(b.position) - reach;
     m.high = m.start.cwiseMax(b.position) + reach;
-    m.fast = isFast(b);
+    m.fast = movedFast(b);
   }
 
   sweepPairs_.clear();
@@ -503,16 +515,19 @@ void BodyGrid::build(std::span<const Body> bodies) {
   // apart on each axis, so a body's overlaps lie in its own cell and the
   // neighbour on the nearer side along each axis (8 cells, not 27: each
   // look-up is a likely cache miss).
+  // In the same pass, whether any body moved fast (movedFast).
   float width = 0, height = 0;
+  bool anyFast = false;
   for (const Body& b : bodies) {
     width = std::max(width, 4 * b.radii.xz);
     height = std::max(height, 4 * b.radii.y);
+    anyFast = anyFast || (!movedSurelySlow(b) && movedFast(b));
   }
   inverseWidth_ = width > 0 ? 1 / width : 1;
   inverseHeight_ = height > 0 ? 1 / height : 1;
   // The sweep stops fast bodies where they first meet another; the grid
   // holds every body where it ends.
-  sweep(bodies);
+  sweep(bodies, anyFast);
   auto endOf = [&](std::size_t i) -> Vec3 {
     return stops_.empty() || !(stops_[i].time < 1)
                ? bodies[i].position
@@ -618,29 +633,34 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   // going through the index to the entry took two dependent loads a pair),
   // taken in the last order and insertion-sorted in the same pass: the
   // bodies moved a little since the last build, so the last order is nearly
-  // this one (a few swaps, not a sort's n log n).
-  auto before = [](const XPlace& a, const XPlace& b) {
-    return a.x < b.x || (a.x == b.x && a.body < b.body);
-  };
+  // this one (a few swaps, not a sort's n log n). Ties along x keep their
+  // last order: nothing below depends on it (every pair within reach is
+  // found whichever comes first, and NearestPushers orders pushers itself).
+  // The scan below needs x in order and every pair's reach at most half a
+  // cell (the cell's std::max passed over a NaN radius): x - x is NaN when x
+  // is not finite, the sum when a radius is NaN (or, turned back needlessly,
+  // when radii are infinities of both signs), and a NaN stays in the sum.
+  // Tested once, after the pass (a NaN's place in the order is then
+  // unused): a branch a body cost 8 instructions a body-step.
+  float notFinite = 0;
   for (std::uint32_t k = 0; k < n; ++k) {
     XPlace place = xOrder_[k];
     const Entry& e = entries_[place.body];
-    // The scan below needs x in order and every pair's reach at most half a
-    // cell (the cell's std::max passed over a NaN radius). One test: x - x
-    // is NaN when x is not finite, the sum when a radius is NaN (or, turned
-    // back needlessly, when the radii are infinities of both signs).
-    if (std::isnan((e.position.x() - e.position.x()) + (e.radii.xz + e.radii.y))) return false;
+    notFinite += (e.position.x() - e.position.x()) + (e.radii.xz + e.radii.y);
     place.x = e.position.x(), place.y = e.position.y(), place.z = e.position.z();
     std::uint32_t at = k;
-    for (; at > 0 && before(place, xOrder_[at - 1]); --at) xOrder_[at] = xOrder_[at - 1];
+    for (; at > 0 && place.x < xOrder_[at - 1].x; --at) xOrder_[at] = xOrder_[at - 1];
     xOrder_[at] = place;
   }
+  if (std::isnan(notFinite)) return false;
   // The grid examines at most kMaxBodyCandidates bodies of a body's 8 cells,
   // in an order of its own: with more there, which pushers it finds depends
   // on that order, so the grid must find them. Those cells lie within 2 cells
   // of the body along x (in the clamped coordinates cells are cut from), so
   // 34 bodies (it and 33 others) would lie within 4 cells of each other
-  // along x, consecutive in x order.
+  // along x, consecutive in x order. (Testing only the runs that start at
+  // every 4th or 8th place, shorter to hold any such run, turned fan's crowd
+  // back to the grid: it has runs of 31 within 4 cells.)
   constexpr std::uint32_t kRun = kMaxBodyCandidates + 2;
   for (std::uint32_t k = 0; k + kRun <= n; ++k)
     if (!(clampToCells(xOrder_[k + kRun - 1].x * inverseWidth_) -

@@ -471,8 +471,8 @@ class BodyGrid {
     float skin;
     bool fast;
   };
-  /// Sets stops_ (empty when no body is fast).
-  void sweep(std::span<const Body> bodies);
+  /// Sets stops_ (empty when no body is fast: `anyFast` false).
+  void sweep(std::span<const Body> bodies, bool anyFast);
   /// Fill sweepPairs_ (unsorted, maybe repeated) from movers_: through the
   /// grid cells fast paths cross, or, for kSortedSweepBodies bodies or
   /// fewer, by sorting the movers' boxes along x.
@@ -535,7 +535,7 @@ class BodyGrid {
     float x, y, z;
     std::uint32_t body;
   };
-  /// The centres in x order (ties: lower index first), then one at x
+  /// The centres in x order (ties in the last order), then one at x
   /// +infinity; kept from the last build, whose order is nearly this
   /// build's.
   std::vector<XPlace> xOrder_;
