@@ -622,12 +622,13 @@ struct GridCell {
 
 bool BodyGrid::findNeighboursBySorting(float width, float height) {
   const std::uint32_t n = std::uint32_t(entries_.size());
-  // The bodies, then a place at x +infinity that ends every scan below
+  // The bodies, then kCentreRun places at x +infinity that end every scan below
   // (beyond any reach: no bound to test).
-  if (xOrder_.size() != n + 1) {
-    xOrder_.resize(n + 1);
+  if (xOrder_.size() != n + detail::kCentreRun) {
+    xOrder_.resize(n + detail::kCentreRun);
     for (std::uint32_t i = 0; i < n; ++i) xOrder_[i] = {0, 0, 0, i};
-    xOrder_[n] = {std::numeric_limits<float>::infinity(), 0, 0, kNoNeighbour};
+    for (std::uint32_t i = n; i < n + detail::kCentreRun; ++i)
+      xOrder_[i] = {std::numeric_limits<float>::infinity(), 0, 0, kNoNeighbour};
   }
   // Each centre beside its index (the scan below reads them in a row, where
   // going through the index to the entry took two dependent loads a pair),
@@ -644,7 +645,7 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   // unused): a branch a body cost 8 instructions a body-step.
   float notFinite = 0;
   for (std::uint32_t k = 0; k < n; ++k) {
-    XPlace place = xOrder_[k];
+    detail::SortedCentre place = xOrder_[k];
     const Entry& e = entries_[place.body];
     notFinite += (e.position.x() - e.position.x()) + (e.radii.xz + e.radii.y);
     place.x = e.position.x(), place.y = e.position.y(), place.z = e.position.z();
@@ -711,33 +712,30 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   // of them), so it is at least any pair's summed radii (the sum of two
   // floats no larger rounds to no more): a pair as far apart along z or y
   // fails the box test below, which most pairs in reach along x do. Tested
-  // first, on the centres in a row.
+  // first, on the centres in a row (forNearCentres).
   const float reach = 0.5f * width, reachY = 0.5f * height;
-  for (const XPlace* self = xOrder_.data(); self != xOrder_.data() + n; ++self) {
-    for (const XPlace* other = self + 1; other->x - self->x < reach; ++other) {
-      if (std::abs(self->z - other->z) >= reach || std::abs(self->y - other->y) >= reachY) continue;
-      const std::uint32_t a = self->body, b = other->body;
-      const Entry &p = entries_[a], &q = entries_[b];
-      const float ax = p.position.x() - q.position.x(), ay = p.position.y() - q.position.y(),
-                  az = p.position.z() - q.position.z();
-      const float reachXZ = p.radii.xz + q.radii.xz;
-      if (std::abs(ax) >= reachXZ || std::abs(az) >= reachXZ ||
-          std::abs(ay) >= p.radii.y + q.radii.y)
-        continue;
-      // Measured here once for the pair's two pushes (each body's push
-      // measured it again, with the same result).
-      const float distance = centreDistance(ax, ay, az);
-      const float overlap = pairOverlap(ax, ay, az, distance, p.radii, q.radii);
-      if (withinHalfCell(p.position, q.position)) {
-        link(a, b, distance, overlap);
-        link(b, a, distance, overlap);
-        continue;
-      }
-      const GridCell cellA = cellOf(p.position), cellB = cellOf(q.position);
-      if (examines(cellA, cellB)) link(a, b, distance, overlap);
-      if (examines(cellB, cellA)) link(b, a, distance, overlap);
+  auto pair = [&](const detail::SortedCentre* self, const detail::SortedCentre* other) {
+    const std::uint32_t a = self->body, b = other->body;
+    const Entry &p = entries_[a], &q = entries_[b];
+    const float ax = p.position.x() - q.position.x(), ay = p.position.y() - q.position.y(),
+                az = p.position.z() - q.position.z();
+    const float reachXZ = p.radii.xz + q.radii.xz;
+    if (std::abs(ax) >= reachXZ || std::abs(az) >= reachXZ || std::abs(ay) >= p.radii.y + q.radii.y)
+      return;
+    // Measured here once for the pair's two pushes (each body's push
+    // measured it again, with the same result).
+    const float distance = centreDistance(ax, ay, az);
+    const float overlap = pairOverlap(ax, ay, az, distance, p.radii, q.radii);
+    if (withinHalfCell(p.position, q.position)) {
+      link(a, b, distance, overlap);
+      link(b, a, distance, overlap);
+      return;
     }
-  }
+    const GridCell cellA = cellOf(p.position), cellB = cellOf(q.position);
+    if (examines(cellA, cellB)) link(a, b, distance, overlap);
+    if (examines(cellB, cellA)) link(b, a, distance, overlap);
+  };
+  detail::forNearCentres(xOrder_.data(), n, reach, reachY, pair);
   return true;
 }
 

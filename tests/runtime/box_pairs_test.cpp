@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <bit>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <random>
@@ -130,5 +131,83 @@ TEST_CASE("the one-by-one pair scan finds every pair of meeting boxes with a fas
       }
     std::sort(expected.begin(), expected.end());
     REQUIRE(found == expected);
+  }
+}
+
+namespace {
+
+// `count` centres sorted by x as the neighbour search lays them out, then
+// the kCentreRun at x +infinity: clustered (runs within reach longer than
+// four), some sharing an x, some exactly a reach apart along an axis.
+std::vector<bspf::detail::SortedCentre> randomCentres(std::mt19937& rng, std::uint32_t count,
+                                                      float reach) {
+  std::uniform_real_distribution<float> cluster(-8, 8), spread(-1.2f, 1.2f);
+  std::vector<bspf::detail::SortedCentre> centres;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    bspf::detail::SortedCentre c{cluster(rng) * 0.2f + spread(rng), spread(rng), spread(rng), i};
+    if (i % 7 == 3 && i > 0) c.x = centres.back().x;           // the same x
+    if (i % 11 == 5 && i > 0) c.z = centres.back().z + reach;  // exactly a reach apart
+    centres.push_back(c);
+  }
+  std::sort(centres.begin(), centres.end(), [](const auto& a, const auto& b) { return a.x < b.x; });
+  for (std::uint32_t k = 0; k < bspf::detail::kCentreRun; ++k)
+    centres.push_back({kInfinity, 0, 0, ~0u});
+  return centres;
+}
+
+// A pair of centres as their places in `centres`: first << 32 | second.
+std::uint64_t places(const std::vector<bspf::detail::SortedCentre>& centres,
+                     const bspf::detail::SortedCentre* first,
+                     const bspf::detail::SortedCentre* second) {
+  return std::uint64_t(first - centres.data()) << 32 | std::uint64_t(second - centres.data());
+}
+
+}  // namespace
+
+TEST_CASE(
+    "the four-at-a-time neighbour scan finds the pairs the one-by-one scan finds, in its order",
+    "[runtime][bodies]") {
+  std::mt19937 rng(5);
+  std::size_t found = 0;
+  for (int round = 0; round < 400; ++round) {
+    const std::uint32_t count = 1 + std::uint32_t(rng() % 80);
+    const float reach = 0.9f, reachY = round % 2 == 0 ? 1.7f : 0.4f;
+    const auto centres = randomCentres(rng, count, reach);
+    std::vector<std::uint64_t> fast, reference;
+    bspf::detail::forNearCentres(
+        centres.data(), count, reach, reachY,
+        [&](const auto* self, const auto* other) { fast.push_back(places(centres, self, other)); });
+    bspf::detail::forNearCentresOneByOne(centres.data(), count, reach, reachY,
+                                         [&](const auto* self, const auto* other) {
+                                           reference.push_back(places(centres, self, other));
+                                         });
+    INFO("round " << round);
+    REQUIRE(fast == reference);
+    found += fast.size();
+  }
+  CHECK(found > 5000);  // the comparison means something
+}
+
+TEST_CASE("the one-by-one neighbour scan finds every pair of centres within reach on each axis",
+          "[runtime][bodies]") {
+  std::mt19937 rng(6);
+  for (int round = 0; round < 200; ++round) {
+    const std::uint32_t count = 1 + std::uint32_t(rng() % 60);
+    const float reach = 0.9f, reachY = 1.7f;
+    const auto centres = randomCentres(rng, count, reach);
+    std::vector<std::uint64_t> pairs;
+    bspf::detail::forNearCentresOneByOne(centres.data(), count, reach, reachY,
+                                         [&](const auto* self, const auto* other) {
+                                           pairs.push_back(places(centres, self, other));
+                                         });
+    std::vector<std::uint64_t> expected;
+    for (std::uint32_t k = 0; k < count; ++k)
+      for (std::uint32_t l = k + 1; l < count; ++l)
+        if (std::abs(centres[l].x - centres[k].x) < reach &&
+            std::abs(centres[k].z - centres[l].z) < reach &&
+            std::abs(centres[k].y - centres[l].y) < reachY)
+          expected.push_back(std::uint64_t(k) << 32 | l);
+    INFO("round " << round);
+    REQUIRE(pairs == expected);
   }
 }

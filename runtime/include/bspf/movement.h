@@ -292,6 +292,12 @@ class BodyGrid;
 namespace detail {
 struct StepWorkspace;  // the narrow phases' working lists, private to the runtime
 struct BodyCache;      // what one body keeps from frame to frame, likewise
+/// A body's centre, metres, and its index, for the body phase's sorting
+/// along x (BodyGrid); private to the runtime.
+struct SortedCentre {
+  float x, y, z;
+  std::uint32_t body;
+};
 void pushRange(const World&, const BodyGrid&, std::span<Body>, std::size_t, std::size_t,
                StepScratch&, std::span<StepReport>, std::span<BodyCache>);
 }  // namespace detail
@@ -530,15 +536,10 @@ class BodyGrid {
   /// sorted again (the grid's work meanwhile: the same pairs).
   int buildsUntilSortingAgain_ = 0;
   static constexpr int kBuildsBeforeSortingAgain = 30;
-  /// A body's centre, for the sorting.
-  struct XPlace {
-    float x, y, z;
-    std::uint32_t body;
-  };
-  /// The centres in x order (ties in the last order), then one at x
-  /// +infinity; kept from the last build, whose order is nearly this
-  /// build's.
-  std::vector<XPlace> xOrder_;
+  /// The centres in x order (ties in the last order), then
+  /// detail::kCentreRun at x +infinity; kept from the last build, whose
+  /// order is nearly this build's.
+  std::vector<detail::SortedCentre> xOrder_;
   /// The bodies the grid would examine for a body and whose boxes overlap
   /// its own: a list a body, in nearLinks_ from nearHead_[body] on (the
   /// order does not matter: NearestPushers keeps the nearest whatever the
