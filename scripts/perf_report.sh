@@ -15,10 +15,17 @@
 # and, when bspf_sweep was built with Bullet, the Bullet peer's ns per step
 # (default settings, 6 m/s, 64 agents, 600 frames, median of 3; its crowd is
 # stepped body by body, without pushes, like the replay).
+# When bspf_machine_probe was built, the machine's state (each core's speed,
+# a DRAM read's latency, a cache line's round trip between cores) is printed
+# under the table, measured before and after the runs: on a shared machine a
+# table's figures are comparable with another's only where these match.
 # Builds nothing: a Release build is expected in ${BUILD:-build}.
 #
 #   scripts/perf_report.sh [--levels "arena oa_dm1 terrain ..."] [--methods "planes exact"]
 #                          [--speeds "6 40"] [--runs N] [--no-bullet] [--json FILE]
+#
+# --json FILE also writes {"rows": [one object per table row], "machine":
+# {"before": ..., "after": ...}} (machine empty without the probe).
 #
 # About 5 to 10 minutes for everything on 2 cores; restrict with the options.
 set -euo pipefail
@@ -39,7 +46,7 @@ while [ $# -gt 0 ]; do
     --runs) runs=$2; shift 2 ;;
     --no-bullet) bullet=0; shift ;;
     --json) json_out=$2; shift 2 ;;
-    -h | --help) sed -n '2,24p' "$0"; exit 0 ;;
+    -h | --help) sed -n '2,31p' "$0"; exit 0 ;;
     *) echo "perf_report: unknown option $1 (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -73,6 +80,12 @@ if [ "$bullet" = 1 ] && [ -x "$build/bench/bspf_sweep" ] &&
   have_bullet=1
 fi
 
+probe() {
+  [ -x "$build/bench/bspf_machine_probe" ] && "$build/bench/bspf_machine_probe" >"$tmp/machine.$1.json" ||
+    true
+}
+probe before
+
 selected=()
 for name in $levels; do
   base=$(base_of "$name")
@@ -103,6 +116,8 @@ for name in $levels; do
       echo "perf_report: bspf_sweep failed on $name: no Bullet figure" >&2
   fi
 done
+
+probe after
 
 python3 - "$tmp" "$runs" "$json_out" "${selected[*]}" "$methods" "$speeds" <<'PY'
 import csv, json, os, statistics, sys
@@ -157,7 +172,14 @@ for level in levels.split():
                   f"{m['candidates_mean']:.1f} / {m['candidates_p90']:.0f} | "
                   f"{m['overlapping_mean']:.1f} | {m['ratio_mean']:.2f} / {m['ratio_of_means']:.2f} | "
                   f"{replay['leaves']} | {replay['references_per_triangle']:.2f} | {fmt(bullet)} |")
+machine = {}
+for when in ("before", "after"):
+    path = f"{tmp}/machine.{when}.json"
+    if os.path.exists(path) and os.path.getsize(path) > 0:
+        machine[when] = json.load(open(path))
+        print(f"\nMachine {when} the runs (bspf_machine_probe, ns): " +
+              ", ".join(f"{k} {v}" for k, v in machine[when].items() if k != "case"))
 if json_out:
     with open(json_out, "w") as f:
-        json.dump(table, f, indent=1)
+        json.dump({"rows": table, "machine": machine}, f, indent=1)
 PY
