@@ -10,9 +10,13 @@
 //     core K alone (pinned; Linux only, else one figure for the thread);
 //   - compute_ns_side_by_side: the slowest core's, with every core running
 //     the same loop at once;
-//   - memory_ns / memory_ns_side_by_side: one dependent read at a random
-//     place of a 64 MiB buffer (beyond the caches: a DRAM access), alone and
-//     on every core at once;
+//   - cache_ns: one dependent read at a random place of a 4 MiB buffer,
+//     beyond a core's own caches but within the shared last-level cache of a
+//     quiet machine (where a level blob's working set lives): the figure
+//     that moved most with the walkers' (2.5 times), as other tenants took
+//     that cache;
+//   - memory_ns / memory_ns_side_by_side: the same in a 64 MiB buffer
+//     (a DRAM access), alone and on every core at once;
 //   - round_trip_ns: a cache line passed from the first core to the second
 //     and back (what a thread pool's hand-off, or a line written on one core
 //     and read on the other, costs).
@@ -150,7 +154,8 @@ double roundTripNs(int first, int second) {
 int main(int argc, char** argv) {
   CLI::App app{
       "bspf_machine_probe: the machine's state for reading benchmark figures: each core's "
-      "speed alone and side by side, a DRAM read's latency alone and side by side, a cache "
+      "speed alone and side by side, a read's latency in the shared cache and in DRAM alone and "
+      "side by side, a cache "
       "line's round trip between two cores. Prints one JSON object (ns; medians).",
       "bspf_machine_probe"};
   int repeats = 3;
@@ -159,7 +164,8 @@ int main(int argc, char** argv) {
   if (const int status = bspf::bench::parseCommandLine(app, argc, argv); status >= 0) return status;
 
   const std::vector<int> cores = allowedCores();
-  constexpr std::uint32_t kPlaces = 16u << 20;  // 64 MiB of entries
+  constexpr std::uint32_t kPlaces = 16u << 20;                             // 64 MiB of entries
+  const std::vector<std::uint32_t> cacheCycle = randomCycle(1u << 20, 7);  // 4 MiB
   std::vector<std::vector<std::uint32_t>> cycles;
   for (std::size_t t = 0; t < cores.size() && t < 2; ++t)
     cycles.push_back(randomCycle(kPlaces, t + 1));
@@ -188,6 +194,7 @@ int main(int argc, char** argv) {
   {
     std::thread pinned([&] {
       pinTo(cores[0]);
+      add("cache_ns", repeated([&] { return memoryNs(cacheCycle); }));
       add("memory_ns", repeated([&] { return memoryNs(cycles[0]); }));
     });
     pinned.join();
