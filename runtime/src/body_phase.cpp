@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -509,6 +510,17 @@ std::uint32_t BodyGrid::find(std::uint64_t key) const {
 }
 
 void BodyGrid::build(std::span<const Body> bodies) {
+  struct FromBodies {
+    std::span<const Body> bodies;
+    const Vec3& position(std::size_t i) const { return bodies[i].position; }
+    EllipsoidRadii radii(std::size_t i) const { return bodies[i].radii; }
+    bool fast(std::size_t i) const { return !movedSurelySlow(bodies[i]) && movedFast(bodies[i]); }
+  };
+  buildFrom(bodies, FromBodies{bodies});
+}
+
+template <typename Inputs>
+void BodyGrid::buildFrom(std::span<const Body> bodies, const Inputs& inputs) {
   const std::size_t n = bodies.size();
   // Cells twice as wide as the widest body and twice as tall as the tallest:
   // the centres of two overlapping bodies are then less than half a cell
@@ -518,10 +530,11 @@ void BodyGrid::build(std::span<const Body> bodies) {
   // In the same pass, whether any body moved fast (movedFast).
   float width = 0, height = 0;
   bool anyFast = false;
-  for (const Body& b : bodies) {
-    width = std::max(width, 4 * b.radii.xz);
-    height = std::max(height, 4 * b.radii.y);
-    anyFast = anyFast || (!movedSurelySlow(b) && movedFast(b));
+  for (std::size_t i = 0; i < n; ++i) {
+    const EllipsoidRadii radii = inputs.radii(i);
+    width = std::max(width, 4 * radii.xz);
+    height = std::max(height, 4 * radii.y);
+    anyFast = anyFast || inputs.fast(i);
   }
   inverseWidth_ = width > 0 ? 1 / width : 1;
   inverseHeight_ = height > 0 ? 1 / height : 1;
@@ -530,7 +543,7 @@ void BodyGrid::build(std::span<const Body> bodies) {
   sweep(bodies, anyFast);
   auto endOf = [&](std::size_t i) -> Vec3 {
     return stops_.empty() || !(stops_[i].time < 1)
-               ? bodies[i].position
+               ? inputs.position(i)
                : Vec3(movers_[i].start + stops_[i].time * movers_[i].move);
   };
   // A crowd the sorting turned back (a dense one, most often) is not sorted
@@ -539,7 +552,7 @@ void BodyGrid::build(std::span<const Body> bodies) {
   if (n <= std::size_t(kSortedNeighbourBodies) && buildsUntilSortingAgain_-- <= 0) {
     buildsUntilSortingAgain_ = 0;
     entries_.resize(n);
-    for (std::size_t i = 0; i < n; ++i) entries_[i] = {endOf(i), bodies[i].radii, std::uint32_t(i)};
+    for (std::size_t i = 0; i < n; ++i) entries_[i] = {endOf(i), inputs.radii(i), std::uint32_t(i)};
     sortedNeighbours_ = findNeighboursBySorting(width, height);
     if (sortedNeighbours_) return;
     buildsUntilSortingAgain_ = kBuildsBeforeSortingAgain;
@@ -598,7 +611,7 @@ void BodyGrid::build(std::span<const Body> bodies) {
   for (std::size_t i = n; i-- > 0;) {
     Place& place = places_[i];
     place.entry = --cells_[place.cellSlot].first;
-    entries_[place.entry] = {endOf(i), bodies[i].radii, std::uint32_t(i)};
+    entries_[place.entry] = {endOf(i), inputs.radii(i), std::uint32_t(i)};
     if (bits) {
       // One cell of margin, so a neighbour's bit is always in the box.
       place.bit = std::uint32_t((place.key >> 42) - lowCell[0] + 1 +
@@ -853,6 +866,32 @@ void stopAtBody(const World& world, Body& body, const Vec3& at, const Vec3& norm
 }  // namespace
 
 namespace detail {
+
+void startPreparingGrid(BodyGrid& grid, std::size_t bodies) { grid.prepared_.resize(bodies); }
+
+// Run by the thread that has just moved bodies [first, last), whose lines
+// are still in its core's cache.
+void prepareGridRange(BodyGrid& grid, std::span<const Body> bodies, std::size_t first,
+                      std::size_t last) {
+  assert(last <= grid.prepared_.size());
+  for (std::size_t i = first; i < last; ++i) {
+    const Body& b = bodies[i];
+    grid.prepared_[i] = {b.position, b.radii, !movedSurelySlow(b) && movedFast(b)};
+  }
+}
+
+// Precondition: prepareGridRange has covered every body since the last
+// startPreparingGrid, and none has changed since.
+void buildPreparedGrid(BodyGrid& grid, std::span<const Body> bodies) {
+  struct FromPrepared {
+    const std::vector<BodyGrid::Prepared>& prepared;
+    const Vec3& position(std::size_t i) const { return prepared[i].position; }
+    EllipsoidRadii radii(std::size_t i) const { return prepared[i].radii; }
+    bool fast(std::size_t i) const { return prepared[i].fast; }
+  };
+  assert(grid.prepared_.size() == bodies.size());
+  grid.buildFrom(bodies, FromPrepared{grid.prepared_});
+}
 
 void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies, std::size_t first,
                std::size_t last, StepScratch& scratch, std::span<StepReport> reports,

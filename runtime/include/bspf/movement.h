@@ -300,6 +300,12 @@ struct SortedCentre {
 };
 void pushRange(const World&, const BodyGrid&, std::span<Body>, std::size_t, std::size_t,
                StepScratch&, std::span<StepReport>, std::span<BodyCache>);
+// BodyGrid::build in two parts, for the thread pool's stepBodies: each
+// thread takes what the grid needs of its own bodies in the level phase,
+// then one thread builds from that (movement.cpp says why).
+void startPreparingGrid(BodyGrid&, std::size_t bodies);
+void prepareGridRange(BodyGrid&, std::span<const Body>, std::size_t, std::size_t);
+void buildPreparedGrid(BodyGrid&, std::span<const Body>);
 }  // namespace detail
 
 /// The most other bodies that push one body in one step: the nearest
@@ -443,6 +449,19 @@ class BodyGrid {
   friend void detail::pushRange(const World&, const BodyGrid&, std::span<Body>, std::size_t,
                                 std::size_t, StepScratch&, std::span<StepReport>,
                                 std::span<detail::BodyCache>);
+  friend void detail::startPreparingGrid(BodyGrid&, std::size_t);
+  friend void detail::prepareGridRange(BodyGrid&, std::span<const Body>, std::size_t, std::size_t);
+  friend void detail::buildPreparedGrid(BodyGrid&, std::span<const Body>);
+  /// What build reads of a body, but for the sweep of fast bodies.
+  struct Prepared {
+    Vec3 position;
+    EllipsoidRadii radii;
+    bool fast;  ///< movedFast
+  };
+  /// build, given what it reads of each body (by index i < bodies.size():
+  /// position(i), radii(i), fast(i)).
+  template <typename Inputs>
+  void buildFrom(std::span<const Body> bodies, const Inputs& inputs);
   struct Entry {
     Vec3 position;
     EllipsoidRadii radii;
@@ -507,7 +526,8 @@ class BodyGrid {
   /// By cell, body index order within a cell; by body index when
   /// sortedNeighbours_.
   std::vector<Entry> entries_;
-  std::vector<Place> places_;  ///< by body index
+  std::vector<Place> places_;       ///< by body index
+  std::vector<Prepared> prepared_;  ///< by body index (detail::prepareGridRange)
   /// When the box of the occupied cells, grown by one cell on every side, is
   /// small (a few hundred cells a body): a bit a cell of it, set where a
   /// body is, so that most empty neighbours cost a bit test, not a hash
