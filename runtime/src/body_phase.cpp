@@ -453,22 +453,22 @@ void appendMeetingPairs(const SortedBoxes& boxes, std::vector<std::uint64_t>& pa
 
 }  // namespace detail
 
-void BodyGrid::sweep(std::span<const Body> bodies, bool anyFast) {
+template <typename Inputs>
+void BodyGrid::sweep(std::size_t n, const Inputs& inputs, bool anyFast) {
   stops_.clear();
   if (!anyFast) return;
-  const std::size_t n = bodies.size();
   movers_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const Body& b = bodies[i];
     Mover& m = movers_[i];
-    m.start = b.lastStepStart;
-    m.move = b.position - m.start;
-    m.radii = b.radii;
-    m.skin = b.settings.skin;
-    const Vec3 reach(b.radii.xz + m.skin, b.radii.y + m.skin, b.radii.xz + m.skin);
-    m.low = m.start.cwiseMin(b.position) - reach;
-    m.high = m.start.cwiseMax(b.position) + reach;
-    m.fast = movedFast(b);
+    const Vec3& position = inputs.position(i);
+    m.start = inputs.start(i);
+    m.move = position - m.start;
+    m.radii = inputs.radii(i);
+    m.skin = inputs.skin(i);
+    const Vec3 reach(m.radii.xz + m.skin, m.radii.y + m.skin, m.radii.xz + m.skin);
+    m.low = m.start.cwiseMin(position) - reach;
+    m.high = m.start.cwiseMax(position) + reach;
+    m.fast = inputs.fast(i);
   }
 
   sweepPairs_.clear();
@@ -513,15 +513,16 @@ void BodyGrid::build(std::span<const Body> bodies) {
   struct FromBodies {
     std::span<const Body> bodies;
     const Vec3& position(std::size_t i) const { return bodies[i].position; }
+    const Vec3& start(std::size_t i) const { return bodies[i].lastStepStart; }
     EllipsoidRadii radii(std::size_t i) const { return bodies[i].radii; }
+    float skin(std::size_t i) const { return bodies[i].settings.skin; }
     bool fast(std::size_t i) const { return !movedSurelySlow(bodies[i]) && movedFast(bodies[i]); }
   };
-  buildFrom(bodies, FromBodies{bodies});
+  buildFrom(bodies.size(), FromBodies{bodies});
 }
 
 template <typename Inputs>
-void BodyGrid::buildFrom(std::span<const Body> bodies, const Inputs& inputs) {
-  const std::size_t n = bodies.size();
+void BodyGrid::buildFrom(std::size_t n, const Inputs& inputs) {
   // Cells twice as wide as the widest body and twice as tall as the tallest:
   // the centres of two overlapping bodies are then less than half a cell
   // apart on each axis, so a body's overlaps lie in its own cell and the
@@ -540,7 +541,7 @@ void BodyGrid::buildFrom(std::span<const Body> bodies, const Inputs& inputs) {
   inverseHeight_ = height > 0 ? 1 / height : 1;
   // The sweep stops fast bodies where they first meet another; the grid
   // holds every body where it ends.
-  sweep(bodies, anyFast);
+  sweep(n, inputs, anyFast);
   auto endOf = [&](std::size_t i) -> Vec3 {
     return stops_.empty() || !(stops_[i].time < 1)
                ? inputs.position(i)
@@ -876,21 +877,23 @@ void prepareGridRange(BodyGrid& grid, std::span<const Body> bodies, std::size_t 
   assert(last <= grid.prepared_.size());
   for (std::size_t i = first; i < last; ++i) {
     const Body& b = bodies[i];
-    grid.prepared_[i] = {b.position, b.radii, !movedSurelySlow(b) && movedFast(b)};
+    grid.prepared_[i] = {b.position, b.lastStepStart, b.radii, b.settings.skin,
+                         !movedSurelySlow(b) && movedFast(b)};
   }
 }
 
 // Precondition: prepareGridRange has covered every body since the last
-// startPreparingGrid, and none has changed since.
-void buildPreparedGrid(BodyGrid& grid, std::span<const Body> bodies) {
+// startPreparingGrid. Reads no body: other threads may be pushing them.
+void buildPreparedGrid(BodyGrid& grid, const BodyGrid& prepared) {
   struct FromPrepared {
     const std::vector<BodyGrid::Prepared>& prepared;
     const Vec3& position(std::size_t i) const { return prepared[i].position; }
+    const Vec3& start(std::size_t i) const { return prepared[i].start; }
     EllipsoidRadii radii(std::size_t i) const { return prepared[i].radii; }
+    float skin(std::size_t i) const { return prepared[i].skin; }
     bool fast(std::size_t i) const { return prepared[i].fast; }
   };
-  assert(grid.prepared_.size() == bodies.size());
-  grid.buildFrom(bodies, FromPrepared{grid.prepared_});
+  grid.buildFrom(prepared.prepared_.size(), FromPrepared{prepared.prepared_});
 }
 
 void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies, std::size_t first,

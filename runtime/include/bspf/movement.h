@@ -301,11 +301,12 @@ struct SortedCentre {
 void pushRange(const World&, const BodyGrid&, std::span<Body>, std::size_t, std::size_t,
                StepScratch&, std::span<StepReport>, std::span<BodyCache>);
 // BodyGrid::build in two parts, for the thread pool's stepBodies: each
-// thread takes what the grid needs of its own bodies in the level phase,
-// then one thread builds from that (movement.cpp says why).
+// thread takes what the grid needs of its own bodies in the level phase
+// (into one grid's prepared inputs), then each pushing thread builds its
+// own grid from those (movement.cpp says why).
 void startPreparingGrid(BodyGrid&, std::size_t bodies);
 void prepareGridRange(BodyGrid&, std::span<const Body>, std::size_t, std::size_t);
-void buildPreparedGrid(BodyGrid&, std::span<const Body>);
+void buildPreparedGrid(BodyGrid&, const BodyGrid& prepared);
 }  // namespace detail
 
 /// The most other bodies that push one body in one step: the nearest
@@ -451,17 +452,20 @@ class BodyGrid {
                                 std::span<detail::BodyCache>);
   friend void detail::startPreparingGrid(BodyGrid&, std::size_t);
   friend void detail::prepareGridRange(BodyGrid&, std::span<const Body>, std::size_t, std::size_t);
-  friend void detail::buildPreparedGrid(BodyGrid&, std::span<const Body>);
-  /// What build reads of a body, but for the sweep of fast bodies.
+  friend void detail::buildPreparedGrid(BodyGrid&, const BodyGrid&);
+  /// What build reads of a body.
   struct Prepared {
     Vec3 position;
+    Vec3 start;  ///< Body::lastStepStart
     EllipsoidRadii radii;
-    bool fast;  ///< movedFast
+    float skin;  ///< MovementSettings::skin
+    bool fast;   ///< movedFast
   };
-  /// build, given what it reads of each body (by index i < bodies.size():
-  /// position(i), radii(i), fast(i)).
+  /// build, given what it reads of each of `n` bodies (by index i < n:
+  /// position(i), start(i), radii(i), skin(i), fast(i)); it reads nothing
+  /// else of them.
   template <typename Inputs>
-  void buildFrom(std::span<const Body> bodies, const Inputs& inputs);
+  void buildFrom(std::size_t n, const Inputs& inputs);
   struct Entry {
     Vec3 position;
     EllipsoidRadii radii;
@@ -496,8 +500,10 @@ class BodyGrid {
     float skin;
     bool fast;
   };
-  /// Sets stops_ (empty when no body is fast: `anyFast` false).
-  void sweep(std::span<const Body> bodies, bool anyFast);
+  /// Sets stops_ (empty when no body is fast: `anyFast` false), from the
+  /// `n` bodies' `inputs` (as buildFrom's).
+  template <typename Inputs>
+  void sweep(std::size_t n, const Inputs& inputs, bool anyFast);
   /// Fill sweepPairs_ (unsorted, maybe repeated) from movers_: through the
   /// grid cells fast paths cross, or, for kSortedSweepBodies bodies or
   /// fewer, by sorting the movers' boxes along x.
@@ -589,8 +595,8 @@ class StepScratch {
   /// from step to step, so a body stepped alone with its own scratch reuses
   /// it over frames; stepBodies and stepBodiesAgainstLevel keep one per body.
   NearbyTriangles nearby;
-  /// The body grid stepBodies builds each frame (the pool overload uses the
-  /// first scratch's).
+  /// The body grid stepBodies builds each frame (the pool overload builds
+  /// one in each thread's scratch).
   BodyGrid bodyGrid;
 
   /// How many triangles the last slide's narrow phase tested: the nearby
@@ -658,7 +664,8 @@ class ThreadPool;
 /// bodies run in parallel. Gives the same trajectories and reports as the
 /// single-threaded stepBodies, bit for bit, for any number of threads.
 /// `scratches` holds one scratch per pool thread (scratches[t] for thread t;
-/// scratches[0] also holds the frame's body grid); keep them across frames.
+/// each holds the frame's body grid, scratches[0] always, the others when
+/// their thread pushed bodies); keep them across frames.
 /// Preconditions: as stepBodies, and scratches.size() >= pool.threadCount().
 /// Thread safety: uses the pool (one call at a time per pool) and the
 /// scratches; the World is only read.
