@@ -10,6 +10,14 @@
 //     core K alone (pinned; Linux only, else one figure for the thread);
 //   - compute_ns_side_by_side: the slowest core's, with every core running
 //     the same loop at once;
+//   - throughput_ns / throughput_ns_side_by_side: 64 independent multiplies
+//     (16 vectors of four), ns, on the first core alone and the slowest core
+//     with every core running them at once. Bound by the core's width, not
+//     its clock: two virtual CPUs placed on one physical core (two hardware
+//     threads) share it, and the side-by-side figure rises (1.5 times,
+//     measured, when the round trip also fell from about 500 to 117 ns),
+//     which the dependent chain above does not show. No two threads then
+//     run twice as fast as one;
 //   - cache_ns: one dependent read at a random place of a 4 MiB buffer,
 //     beyond a core's own caches but within the shared last-level cache of a
 //     quiet machine (where a level blob's working set lives): the figure
@@ -89,6 +97,24 @@ double computeNs() {
   return nanosecondsSince(start, kSteps);
 }
 
+// ns per 64 independent multiplies (16 chains of four-float vectors, as the
+// compiler vectorises the inner loop: enough in flight to keep every
+// multiplier busy).
+double throughputNs() {
+  constexpr long kSteps = 10'000'000;
+  constexpr int kLanes = 64;
+  volatile float seed = 1;
+  alignas(16) float x[kLanes];
+  for (int k = 0; k < kLanes; ++k) x[k] = seed + float(k) * 1e-7f;
+  const auto start = Clock::now();
+  for (long step = 0; step < kSteps; ++step)
+    for (int k = 0; k < kLanes; ++k) x[k] *= 0.9999999f;
+  float sum = 0;
+  for (float v : x) sum += v;
+  seed = sum;
+  return nanosecondsSince(start, kSteps);
+}
+
 // A single random cycle through `places` entries (Sattolo's shuffle), so a
 // walk reads every entry once, each read depending on the last.
 std::vector<std::uint32_t> randomCycle(std::uint32_t places, std::uint64_t seed) {
@@ -154,7 +180,8 @@ double roundTripNs(int first, int second) {
 int main(int argc, char** argv) {
   CLI::App app{
       "bspf_machine_probe: the machine's state for reading benchmark figures: each core's "
-      "speed alone and side by side, a read's latency in the shared cache and in DRAM alone and "
+      "speed alone and side by side (latency and throughput), a read's latency in the shared cache "
+      "and in DRAM alone and "
       "side by side, a cache "
       "line's round trip between two cores. Prints one JSON object (ns; medians).",
       "bspf_machine_probe"};
@@ -191,6 +218,16 @@ int main(int argc, char** argv) {
   if (cores.size() > 1)
     add("compute_ns_side_by_side",
         repeated([&] { return sideBySide(cores, [](std::size_t) { return computeNs(); }); }));
+  {
+    std::thread pinned([&] {
+      pinTo(cores[0]);
+      add("throughput_ns", repeated(throughputNs));
+    });
+    pinned.join();
+  }
+  if (cores.size() > 1)
+    add("throughput_ns_side_by_side",
+        repeated([&] { return sideBySide(cores, [](std::size_t) { return throughputNs(); }); }));
   {
     std::thread pinned([&] {
       pinTo(cores[0]);

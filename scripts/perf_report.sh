@@ -16,7 +16,8 @@
 # (default settings, 6 m/s, 64 agents, 600 frames, median of 3; its crowd is
 # stepped body by body, without pushes, like the replay).
 # When bspf_machine_probe was built, the machine's state (each core's speed,
-# a DRAM read's latency, a cache line's round trip between cores) is printed
+# whether two cores share one physical core's width, a DRAM read's latency,
+# a cache line's round trip between cores) is printed
 # under the table, measured before and after the runs: on a shared machine a
 # table's figures are comparable with another's only where these match.
 # Builds nothing: a Release build is expected in ${BUILD:-build}.
