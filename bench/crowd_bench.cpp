@@ -25,20 +25,18 @@
 #include <vector>
 
 #include "support/cli.h"
+#include "support/median.h"
 #include "support/mesh_blob.h"
 #include "walkers_sim.h"
 
 namespace {
 
+using bspf::bench::median;
+
 using Clock = std::chrono::steady_clock;
 
 double nanoseconds(Clock::time_point from, Clock::time_point to) {
   return std::chrono::duration<double, std::nano>(to - from).count();
-}
-
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  return values[values.size() / 2];
 }
 
 // `side` x `side` walkers on a 1.5 m grid, each walking its own way (at

@@ -39,6 +39,7 @@
 #include <vector>
 
 #include "support/cli.h"
+#include "support/median.h"
 
 #ifdef __linux__
 #include <pthread.h>
@@ -47,15 +48,12 @@
 
 namespace {
 
+using bspf::bench::median;
+
 using Clock = std::chrono::steady_clock;
 
 double nanosecondsSince(Clock::time_point start, double operations) {
   return std::chrono::duration<double, std::nano>(Clock::now() - start).count() / operations;
-}
-
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  return values[values.size() / 2];
 }
 
 // The cores this process may run on (one entry, -1, where they are unknown).

@@ -43,10 +43,13 @@
 #include <vector>
 
 #include "support/cli.h"
+#include "support/median.h"
 #include "velocity.h"  // the runtime's private velocity model: the desired end
 #include "walkers_sim.h"
 
 namespace {
+
+using bspf::bench::median;
 
 using bspf::Body;
 using bspf::Vec3;
@@ -76,12 +79,6 @@ Recording recordCrowd(const World& world, std::span<const Vec3> starts,
     });
   recording.refusedMoves = crowd.summary().refusedMoves;
   return recording;
-}
-
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t mid = values.size() / 2;
-  return values.size() % 2 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
 }
 
 // Replays recorded step `i` with stepBody, the agent's own nearby triangles

@@ -42,6 +42,7 @@
 
 #include "oracle.h"
 #include "support/cli.h"
+#include "support/median.h"
 #include "support/mesh_blob.h"
 #include "walkers_sim.h"
 
@@ -54,6 +55,8 @@ using bspf::Body;
 using bspf::Vec3;
 
 namespace {
+
+using bspf::bench::median;
 
 constexpr float kSpeed = 6.0f;  // m/s
 constexpr bspf::EllipsoidRadii kRadii{0.45f, 0.85f};
@@ -165,13 +168,6 @@ class Crowd {
   std::vector<bspf::walkers::RandomWalk> agents_;
   std::vector<Vec3> forces_;
 };
-
-double median(std::vector<double> values) {
-  if (values.empty()) return 0;
-  std::sort(values.begin(), values.end());
-  const std::size_t mid = values.size() / 2;
-  return values.size() % 2 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
-}
 
 // What one level and configuration measured.
 struct Result {
