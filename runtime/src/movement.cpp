@@ -500,10 +500,14 @@ void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3
   pool.parallelFor(
       bodies.size(), kBodiesPerRange, [&](int thread, std::size_t first, std::size_t last) {
         const std::size_t count = last - first;
-        invalid += detail::stepRangeAgainstLevel(
+        const std::size_t refused = detail::stepRangeAgainstLevel(
             world, bodies.subspan(first, count), forces.subspan(first, count), dt,
             scratches[thread], reports.empty() ? reports : reports.subspan(first, count),
             std::span(caches).subspan(first, count));
+        // Only when there is something to add (nearly never): the counter's
+        // line is shared by every thread, and an add at every range would
+        // pass it from core to core.
+        if (refused > 0) invalid += refused;
         detail::prepareGridRange(prepared, bodies, first, last);
       });
   if (invalid > 0) {
