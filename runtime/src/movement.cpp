@@ -520,7 +520,7 @@ void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3
   // prepared inputs, before its first range: the pushes read the grid all
   // over, and a grid built by one core had each other core pull its lines
   // across, one slow transfer at a time (1,024 walkers on oa_dm4, 2 threads:
-  // planes 464 -> 441 ns a body, exact 591 -> 559). The copies are built
+  // planes 490 -> 437 ns a body, exact 662 -> 613). The copies are built
   // side by side from the same inputs, so they are equal, and the wall time
   // of the build is one build's, as before. The caller's copy is built even
   // when other threads took all its ranges: scratches[0] holds the frame's grid.
