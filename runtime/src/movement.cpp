@@ -524,14 +524,15 @@ void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3
   // side by side from the same inputs, so they are equal, and the wall time
   // of the build is one build's, as before. The caller's copy is built even
   // when other threads took all its ranges: scratches[0] holds the frame's grid.
-  std::vector<char> built(std::size_t(pool.threadCount()), 0);
+  for (int thread = 0; thread < pool.threadCount(); ++thread)
+    scratches[std::size_t(thread)].workspace().gridBuilt = false;
   auto buildOnce = [&](int thread) -> const BodyGrid& {
-    BodyGrid& own = scratches[std::size_t(thread)].bodyGrid;
-    if (!built[std::size_t(thread)]) {
-      detail::buildPreparedGrid(own, prepared);
-      built[std::size_t(thread)] = 1;
+    StepScratch& scratch = scratches[std::size_t(thread)];
+    if (!scratch.workspace().gridBuilt) {
+      detail::buildPreparedGrid(scratch.bodyGrid, prepared);
+      scratch.workspace().gridBuilt = true;
     }
-    return own;
+    return scratch.bodyGrid;
   };
   pool.parallelFor(bodies.size(), kBodiesPerRange,
                    [&](int thread, std::size_t first, std::size_t last) {

@@ -476,6 +476,10 @@ struct StepWorkspace {
   /// stepBodiesAgainstLevel) steps, so each body reuses its own query and
   /// candidates over frames.
   std::vector<BodyCache> bodies;
+  /// Whether the scratch's bodyGrid holds the current frame's grid (the
+  /// pool's stepBodies: set by the thread that builds it, cleared by the
+  /// caller before the body phase).
+  bool gridBuilt = false;
 };
 
 /// Makes `cache` the one the narrow phases use in `scratch` (its nearby
