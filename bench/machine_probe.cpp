@@ -135,6 +135,16 @@ double memoryNs(const std::vector<std::uint32_t>& cycle) {
   return nanosecondsSince(start, kReads);
 }
 
+// Runs `work` on a thread pinned to `core`, and waits for it.
+template <typename Work>
+void onCore(int core, Work work) {
+  std::thread pinned([&] {
+    pinTo(core);
+    work();
+  });
+  pinned.join();
+}
+
 // Runs `measure` on every core at once, each thread pinned to its own;
 // returns the largest result.
 template <typename Measure>
@@ -206,34 +216,21 @@ int main(int argc, char** argv) {
     std::snprintf(text, sizeof text, ",\"%s\":%.2f", key.c_str(), value);
     json += text;
   };
-  for (int core : cores) {
-    std::thread pinned([&] {
-      pinTo(core);
+  for (int core : cores)
+    onCore(core, [&] {
       add(core < 0 ? "compute_ns" : "compute_ns_cpu" + std::to_string(core), repeated(computeNs));
     });
-    pinned.join();
-  }
   if (cores.size() > 1)
     add("compute_ns_side_by_side",
         repeated([&] { return sideBySide(cores, [](std::size_t) { return computeNs(); }); }));
-  {
-    std::thread pinned([&] {
-      pinTo(cores[0]);
-      add("throughput_ns", repeated(throughputNs));
-    });
-    pinned.join();
-  }
+  onCore(cores[0], [&] { add("throughput_ns", repeated(throughputNs)); });
   if (cores.size() > 1)
     add("throughput_ns_side_by_side",
         repeated([&] { return sideBySide(cores, [](std::size_t) { return throughputNs(); }); }));
-  {
-    std::thread pinned([&] {
-      pinTo(cores[0]);
-      add("cache_ns", repeated([&] { return memoryNs(cacheCycle); }));
-      add("memory_ns", repeated([&] { return memoryNs(cycles[0]); }));
-    });
-    pinned.join();
-  }
+  onCore(cores[0], [&] {
+    add("cache_ns", repeated([&] { return memoryNs(cacheCycle); }));
+    add("memory_ns", repeated([&] { return memoryNs(cycles[0]); }));
+  });
   if (cores.size() > 1) {
     const std::vector<int> two{cores[0], cores[1]};
     add("memory_ns_side_by_side", repeated([&] {
