@@ -54,10 +54,21 @@ Move makeMove(const Vec3& start, const Vec3& end, EllipsoidRadii radii, float wa
                                              float startSide, float endSide, const Move& move,
                                              auto& local, Hit& best) {
   const std::uint32_t slot = block.slot[lane];
+  // Only a lane that would replace `best` is worth its six planes: one
+  // facing the move less, or as much with a higher triangle, loses to it
+  // whether it blocks or not. The order is the comparison's at the end,
+  // made first. (At 40 m/s a scan that finds a blocking triangle found 4 on
+  // average, most of them the floor's coplanar pieces under the body's end:
+  // walkers on oa_dm5, planes.)
+  const Vec3 normal(block.normalX[lane], block.normalY[lane], block.normalZ[lane]);
+  const float facing = normal.dot(move.step);
+  const std::uint32_t t = local.triangle(slot);
+  if (best.found() && !(facing < best.facing || (facing == best.facing && t < best.triangle)))
+    return;
   detail::PlanesCold& candidate = local[slot];
   const float reach = block.reach[lane];
   if (candidate.grownIn != local.generation()) {
-    candidate.triangle = local.triangle(slot);
+    candidate.triangle = t;
     detail::growPlanes(world, candidate.triangle, move.radii, candidate.grown);
     candidate.grownIn = local.generation();
   }
@@ -79,7 +90,6 @@ Move makeMove(const Vec3& start, const Vec3& end, EllipsoidRadii radii, float wa
     inside = candidate.grown.inside(move.end);
   }
   if (!inside) return;
-  const Vec3 normal(block.normalX[lane], block.normalY[lane], block.normalZ[lane]);
   // A steep face's squared-off edge that a rounded body rides over (a lip's
   // top edge) does not block: the walkable face behind it holds the body
   // (rounded_edges.h).
@@ -87,10 +97,7 @@ Move makeMove(const Vec3& start, const Vec3& end, EllipsoidRadii radii, float wa
       detail::ridesOverEdge(world, candidate.triangle, candidate.grown.highestY, point, move.start,
                             move.end, move.radii, move.walkableNormalY))
     return;
-  const float facing = normal.dot(move.step);
-  const std::uint32_t t = candidate.triangle;
-  if (!best.found() || facing < best.facing || (facing == best.facing && t < best.triangle))
-    best = Hit{t, facing, normal, block.distance[lane], reach};
+  best = Hit{t, facing, normal, block.distance[lane], reach};
 }
 
 // Offers every candidate of `blocks` in the way of the move to `best`,
