@@ -662,7 +662,8 @@ class ThreadPool;
 
 /// stepBodies on every thread of `pool`: both phases are split into ranges of
 /// bodies run in parallel. Gives the same trajectories and reports as the
-/// single-threaded stepBodies, bit for bit, for any number of threads.
+/// single-threaded stepBodies, bit for bit, for any number of threads (with
+/// a pool of one thread it is that stepBodies, on scratches[0]).
 /// `scratches` holds one scratch per pool thread (scratches[t] for thread t;
 /// each holds the frame's body grid, scratches[0] always, the others when
 /// their thread pushed bodies); keep them across frames.
