@@ -434,6 +434,32 @@ class ExactCandidates : public LocalCandidates<detail::ExactCold, Make> {
   Vec3 toSphere_;
 };
 
+// How far the unit sphere at `p` (sphere space) rests in front of the plane
+// of `tri` when it rests on the face at the gap `padding` (within rounding),
+// over the face's inside (so the face is the nearest part of the triangle),
+// and `move` presses it into the face far enough to meet it (the sweep would
+// meet the face within the move, unless something else came first); else 0.
+double restingDistance(const detail::TriangleD& tri, const Vec3& p, const Vec3& move,
+                       float padding) {
+  // The gap the slide leaves is made in float, about 1e-5 off in sphere
+  // space at 100 m from the origin: a tenth of the default skin's.
+  constexpr double kGapTolerance = 1e-4;
+  const Eigen::Vector3d start = p.cast<double>();
+  const Eigen::Vector3d& n = tri.normal;
+  const double side = n.dot(start - tri.a);
+  const double approach = n.dot(move.cast<double>());
+  if (!(std::abs(side - 1 - padding) <= kGapTolerance) || !(-approach >= side - 1)) return 0;
+  // Where the centre is over the plane, inside every edge (each edge's
+  // n . (edge x (point - its start)), as the face stage measures it).
+  const Eigen::Vector3d over = start - side * n;
+  const Eigen::Vector3d corners[3] = {tri.a, tri.b, tri.c};
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d& from = corners[k];
+    if (!(n.dot((corners[(k + 1) % 3] - from).cross(over - from)) > 0)) return 0;
+  }
+  return side;
+}
+
 // The world-space unit normal of a sphere-space normal: normals scale by the
 // inverse of the position scale, so by (1/rxz, 1/ry, 1/rxz) again.
 Vec3 worldNormal(const Vec3& sphereNormal, const Vec3& toSphere) {
@@ -491,7 +517,8 @@ void recoverFromPenetration(const World& world, Vec3& p, const Vec3& toSphere, f
 
 SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desiredEnd,
                        EllipsoidRadii radii, const MovementSettings& settings,
-                       float walkableNormalY, StepScratch& scratch) {
+                       float walkableNormalY, StepScratch& scratch,
+                       std::span<const std::uint32_t> hints) {
   SlideResult result;
   const Vec3 toSphere(1 / radii.xz, 1 / radii.y, 1 / radii.xz);
   // The skin in sphere units, so the world gap is at least `skin`.
@@ -510,70 +537,12 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
   std::vector<std::pair<double, std::uint32_t>>& open = workspace.open;
   const detail::ExactMaskFunction exactMask = detail::exactMaskFunction();
   const bool avx = detail::sweepUsesAvx();
-  for (int iteration = 0;; ++iteration) {
-    if (move.squaredNorm() < 1e-14f) break;
-    const Vec3 from = p.cwiseQuotient(toSphere);
-    const Vec3 to = (p + move).cwiseQuotient(toSphere);
-    const Bounds swept = detail::slideSweptBounds(from, to, radii);
-    Impact impact;
-    std::uint32_t impactSlot = 0;  // the candidate `impact` is with
-    bool penetrating = false;
-    // The face stage for every candidate the box and the side-value
-    // pre-check keep (a path that stays more than the body's extent in
-    // front of the plane, or starts behind it, cannot touch the triangle),
-    // then the edge stage only for those whose face stage left them open
-    // and could come before the earliest impact found so far: on the
-    // ground, the face under the body settles its neighbours.
-    open.clear();
-    const detail::SpherePath path(p, move);
-    const detail::BlockBoxTest boxTest(swept);
-    for (const detail::CandidateBlock* const block :
-         local.around(world, swept, moveLength, radii, scratch, desiredEnd - start)) {
-      if (!boxTest.meets(*block)) continue;
-      for (std::uint32_t bits = exactMask(*block, swept, from, to); bits != 0; bits &= bits - 1) {
-        const std::uint32_t slot = block->slot[std::countr_zero(bits)];
-        const float before = impact.time;  // every new impact is earlier
-        detail::ExactCold& cold = local.made(slot);
-        const double earliest =
-            detail::faceStage(avx, cold.sphere, path, impact, penetrating, &cold.measured);
-        if (impact.time != before) impactSlot = slot;
-        if (earliest < 1) open.push_back({earliest, slot});
-      }
-    }
-    for (const auto& [earliest, slot] : open)
-      if (earliest < impact.time) {
-        const float before = impact.time;
-        detail::edgeStage(avx, local.made(slot).sphere, path, impact);
-        if (impact.time != before) impactSlot = slot;
-      }
-    // A start in penetration (pushed there by another body, or placed there)
-    // is first moved out, then the sweep is made again from there.
-    if (penetrating && iteration == 0 && !recovered) {
-      recovered = true;
-      recoverFromPenetration(world, p, toSphere, padding, walkableNormalY, radii, moveLength, local,
-                             scratch, result);
-      --iteration;
-      continue;
-    }
-    if (impact.time > 1) {
-      p += move;
-      break;
-    }
-    if (iteration == settings.maxIterations) {
-      result.refused = true;
-      break;  // p is the last contact point: a safe position
-    }
-    // Advance to the contact, then step back out to the padding along the
-    // contact normal (stepping back along the velocity, as the well-known
-    // write-ups do, leaves a grazing body inside the padding).
-    p += impact.time * move;
-    const Vec3 touched = (p - impact.normal).cwiseQuotient(toSphere);
-    const Vec3 normal = worldNormal(impact.normal, toSphere);
-    const bool walkable = normal.y() >= walkableNormalY;
-    // On walkable ground the gap is made straight up: along a slope's normal
-    // it would step the body downhill a little every frame.
-    const float gap = impact.normal.dot(move) < 0 ? padding : 0;
-    p += walkable ? Vec3(0, gap / impact.normal.y(), 0) : Vec3(impact.normal * gap);
+  // The slide along a surface met (world unit normal `normal`, from the
+  // sphere-space impact `impact`, at `touched`, world): the rest of the
+  // move goes on along it (or along the crease it makes with an earlier
+  // one), and the contact is recorded.
+  auto slideAlong = [&](const Impact& impact, const Vec3& normal, bool walkable,
+                        const Vec3& touched, std::uint32_t triangle) {
     // The rest of the move slides in world space, as the planes method's
     // does (and the classic write-ups). Removing the normal part in sphere
     // space instead removes it along the world normal scaled by the squared
@@ -617,7 +586,102 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
     if (planeCount < int(planes.size())) planes[planeCount++] = normal;
     move = rest.cwiseProduct(toSphere);
     ++result.iterations;
-    addContact(result, normal, walkableNormalY, impact.edge, touched, local.triangle(impactSlot));
+    addContact(result, normal, walkableNormalY, impact.edge, touched, triangle);
+  };
+  // A body resting on the ground it stood on last step (a hint), its move
+  // pressing into it (a walker's frame of gravity), slides along that ground
+  // from its start: the first sweep would have met the ground within the
+  // move, after the gap the body rests at, and slid the rest of the move
+  // along it from there, which takes the body where this does. So a walking
+  // step sweeps once, not twice. Everything the move meets is still swept.
+  int firstIteration = 0;
+  if (!hints.empty()) {
+    const Vec3 from = p.cwiseQuotient(toSphere);
+    local.around(world, detail::slideSweptBounds(from, (p + move).cwiseQuotient(toSphere), radii),
+                 moveLength, radii, scratch, desiredEnd - start);
+    for (const std::uint32_t hint : hints) {
+      const auto lane = hint == kNoTriangle ? std::nullopt : local.laneOf(hint);
+      if (!lane) continue;
+      const std::uint32_t slot = lane->first->slot[lane->second];
+      const double side = restingDistance(local.made(slot).sphere, p, move, padding);
+      if (!(side > 0)) continue;
+      const Vec3 faceNormal = local.made(slot).sphere.normal.cast<float>();
+      const Vec3 normal = worldNormal(faceNormal, toSphere);
+      if (normal.y() < walkableNormalY) continue;
+      const Vec3 touched = (p - float(side) * faceNormal).cwiseQuotient(toSphere);
+      slideAlong({0.0f, faceNormal, false}, normal, true, touched, hint);
+      firstIteration = 1;
+      break;
+    }
+  }
+  for (int iteration = firstIteration;; ++iteration) {
+    // A move the ground took all of (a body standing still) is still swept
+    // once, as its first sweep was: for a start in penetration.
+    const bool firstSweep = iteration == firstIteration && !recovered;
+    if (move.squaredNorm() < 1e-14f && !(firstSweep && firstIteration > 0)) break;
+    const Vec3 from = p.cwiseQuotient(toSphere);
+    const Vec3 to = (p + move).cwiseQuotient(toSphere);
+    const Bounds swept = detail::slideSweptBounds(from, to, radii);
+    Impact impact;
+    std::uint32_t impactSlot = 0;  // the candidate `impact` is with
+    bool penetrating = false;
+    // The face stage for every candidate the box and the side-value
+    // pre-check keep (a path that stays more than the body's extent in
+    // front of the plane, or starts behind it, cannot touch the triangle),
+    // then the edge stage only for those whose face stage left them open
+    // and could come before the earliest impact found so far: on the
+    // ground, the face under the body settles its neighbours.
+    open.clear();
+    const detail::SpherePath path(p, move);
+    const detail::BlockBoxTest boxTest(swept);
+    for (const detail::CandidateBlock* const block :
+         local.around(world, swept, moveLength, radii, scratch, desiredEnd - start)) {
+      if (!boxTest.meets(*block)) continue;
+      for (std::uint32_t bits = exactMask(*block, swept, from, to); bits != 0; bits &= bits - 1) {
+        const std::uint32_t slot = block->slot[std::countr_zero(bits)];
+        const float before = impact.time;  // every new impact is earlier
+        detail::ExactCold& cold = local.made(slot);
+        const double earliest =
+            detail::faceStage(avx, cold.sphere, path, impact, penetrating, &cold.measured);
+        if (impact.time != before) impactSlot = slot;
+        if (earliest < 1) open.push_back({earliest, slot});
+      }
+    }
+    for (const auto& [earliest, slot] : open)
+      if (earliest < impact.time) {
+        const float before = impact.time;
+        detail::edgeStage(avx, local.made(slot).sphere, path, impact);
+        if (impact.time != before) impactSlot = slot;
+      }
+    // A start in penetration (pushed there by another body, or placed there)
+    // is first moved out, then the sweep is made again from there.
+    if (penetrating && firstSweep) {
+      recovered = true;
+      recoverFromPenetration(world, p, toSphere, padding, walkableNormalY, radii, moveLength, local,
+                             scratch, result);
+      --iteration;
+      continue;
+    }
+    if (impact.time > 1) {
+      p += move;
+      break;
+    }
+    if (iteration == settings.maxIterations) {
+      result.refused = true;
+      break;  // p is the last contact point: a safe position
+    }
+    // Advance to the contact, then step back out to the padding along the
+    // contact normal (stepping back along the velocity, as the well-known
+    // write-ups do, leaves a grazing body inside the padding).
+    p += impact.time * move;
+    const Vec3 touched = (p - impact.normal).cwiseQuotient(toSphere);
+    const Vec3 normal = worldNormal(impact.normal, toSphere);
+    const bool walkable = normal.y() >= walkableNormalY;
+    // On walkable ground the gap is made straight up: along a slope's normal
+    // it would step the body downhill a little every frame.
+    const float gap = impact.normal.dot(move) < 0 ? padding : 0;
+    p += walkable ? Vec3(0, gap / impact.normal.y(), 0) : Vec3(impact.normal * gap);
+    slideAlong(impact, normal, walkable, touched, local.triangle(impactSlot));
   }
   result.end = p.cwiseQuotient(toSphere);
   return result;

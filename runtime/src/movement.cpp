@@ -49,7 +49,8 @@ SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3&
                               float walkableNormalY, StepScratch& scratch,
                               std::span<const std::uint32_t> hints) {
   return settings.method == CollisionMethod::ExactSweep
-             ? slideExact(world, start, desiredEnd, radii, settings, walkableNormalY, scratch)
+             ? slideExact(world, start, desiredEnd, radii, settings, walkableNormalY, scratch,
+                          hints)
              : slideWithPlanes(world, start, desiredEnd, radii, settings, walkableNormalY, scratch,
                                hints);
 }

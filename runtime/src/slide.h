@@ -58,9 +58,14 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
                             std::span<const std::uint32_t> hints = {});
 
 /// Exact continuous collision in unit-sphere space (CollisionMethod::ExactSweep).
+/// `hints`: the walkable triangles the body stood on last step
+/// (Body::groundTriangles; kNoTriangle entries are skipped): a body resting
+/// on one of them at the skin's gap, its move pressing into it, slides along
+/// it from the start, where the first sweep would only have met it.
 SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desiredEnd,
                        EllipsoidRadii radii, const MovementSettings& settings,
-                       float walkableNormalY, StepScratch& scratch);
+                       float walkableNormalY, StepScratch& scratch,
+                       std::span<const std::uint32_t> hints = {});
 
 /// How far, metres, a slide's tree query reaches past the box it needs on
 /// every side: enough for its iterations (which move the end by about the
@@ -228,7 +233,7 @@ class LocalCandidates {
 };
 
 /// The narrow phase `settings.method` names. `hints`: see slideWithPlanes
-/// (the exact sweep ignores them).
+/// and slideExact.
 SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,
                               EllipsoidRadii radii, const MovementSettings& settings,
                               float walkableNormalY, StepScratch& scratch,
