@@ -196,14 +196,18 @@ struct Body {
   Vec3 lastStepStart = Vec3::Zero();
   /// The walkable triangles (indices into World::triangles()) the body's
   /// last step against the level met, each once, the rest kNoTriangle: its
-  /// ground. The step sets them, and the planes method's next step tests
-  /// them first (a walking body meets the ground it stands on first, found
-  /// then without a scan of its candidates, whose pre-check would pass every
-  /// floor triangle under it). Any values are safe: one that is not a
-  /// triangle in the body's way (stale, set by hand, from another level)
+  /// ground. The step sets them, and the next step uses them: the planes
+  /// method tests them first (a walking body meets the ground it stands on
+  /// first, found then without a scan of its candidates, whose pre-check
+  /// would pass every floor triangle under it), and the exact sweep slides a
+  /// body resting on one of them at the skin's gap along it from the start
+  /// (one sweep a walking step, where meeting the ground first took two).
+  /// Any values are safe: one that is not a triangle in the body's way, or
+  /// one the body does not rest on (stale, set by hand, from another level),
   /// costs one test, and a move still ends only where no triangle blocks
-  /// it. They may change which of two surfaces a move meets first, so a game
-  /// that replays steps should keep them with the body's state.
+  /// it. They may change which of two surfaces a move meets first, or its
+  /// end by float rounding, so a game that replays steps should keep them
+  /// with the body's state.
   std::array<std::uint32_t, kGroundTriangles> groundTriangles = kNoGroundTriangles;
   /// Metres: a push from other bodies (pushBodiesApart) that would have come
   /// near the level, carried into the body's next step, which moves the body
