@@ -518,7 +518,8 @@ void recoverFromPenetration(const World& world, Vec3& p, const Vec3& toSphere, f
 SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desiredEnd,
                        EllipsoidRadii radii, const MovementSettings& settings,
                        float walkableNormalY, StepScratch& scratch,
-                       std::span<const std::uint32_t> hints) {
+                       std::span<const std::uint32_t> hints,
+                       std::span<const std::uint32_t> wallHints) {
   SlideResult result;
   const Vec3 toSphere(1 / radii.xz, 1 / radii.y, 1 / radii.xz);
   // The skin in sphere units, so the world gap is at least `skin`.
@@ -592,27 +593,34 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
   // pressing into it (a walker's frame of gravity), slides along that ground
   // from its start: the first sweep would have met the ground within the
   // move, after the gap the body rests at, and slid the rest of the move
-  // along it from there, which takes the body where this does. So a walking
-  // step sweeps once, not twice. Everything the move meets is still swept.
+  // along it from there, which takes the body where this does. Then, as
+  // much, the walls it rests against. So a walking step sweeps once, not
+  // once more for each surface it rests on. Everything the move meets is
+  // still swept, and each of these slides is one of its maxIterations.
   int firstIteration = 0;
-  if (!hints.empty()) {
+  auto slideOnResting = [&](std::span<const std::uint32_t> triangles, bool ground, int most) {
+    for (const std::uint32_t t : triangles) {
+      if (most == 0 || firstIteration == settings.maxIterations) return;
+      const auto lane = t == kNoTriangle ? std::nullopt : local.laneOf(t);
+      if (!lane) continue;
+      const detail::TriangleD& face = local.made(lane->first->slot[lane->second]).sphere;
+      const Vec3 faceNormal = face.normal.cast<float>();
+      const Vec3 normal = worldNormal(faceNormal, toSphere);
+      if ((normal.y() >= walkableNormalY) != ground) continue;
+      const double side = restingDistance(face, p, move, padding);
+      if (!(side > 0)) continue;
+      const Vec3 touched = (p - float(side) * faceNormal).cwiseQuotient(toSphere);
+      slideAlong({0.0f, faceNormal, false}, normal, ground, touched, t);
+      ++firstIteration;
+      --most;
+    }
+  };
+  if (!hints.empty() || !wallHints.empty()) {
     const Vec3 from = p.cwiseQuotient(toSphere);
     local.around(world, detail::slideSweptBounds(from, (p + move).cwiseQuotient(toSphere), radii),
                  moveLength, radii, scratch, desiredEnd - start);
-    for (const std::uint32_t hint : hints) {
-      const auto lane = hint == kNoTriangle ? std::nullopt : local.laneOf(hint);
-      if (!lane) continue;
-      const std::uint32_t slot = lane->first->slot[lane->second];
-      const double side = restingDistance(local.made(slot).sphere, p, move, padding);
-      if (!(side > 0)) continue;
-      const Vec3 faceNormal = local.made(slot).sphere.normal.cast<float>();
-      const Vec3 normal = worldNormal(faceNormal, toSphere);
-      if (normal.y() < walkableNormalY) continue;
-      const Vec3 touched = (p - float(side) * faceNormal).cwiseQuotient(toSphere);
-      slideAlong({0.0f, faceNormal, false}, normal, true, touched, hint);
-      firstIteration = 1;
-      break;
-    }
+    slideOnResting(hints, true, 1);
+    slideOnResting(wallHints, false, kWallTriangles);
   }
   for (int iteration = firstIteration;; ++iteration) {
     // A move the ground took all of (a body standing still) is still swept

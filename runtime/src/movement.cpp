@@ -47,10 +47,11 @@ std::size_t StepScratch::lastSlideScannedLanes() const {
 SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,
                               EllipsoidRadii radii, const MovementSettings& settings,
                               float walkableNormalY, StepScratch& scratch,
-                              std::span<const std::uint32_t> hints) {
+                              std::span<const std::uint32_t> hints,
+                              std::span<const std::uint32_t> wallHints) {
   return settings.method == CollisionMethod::ExactSweep
              ? slideExact(world, start, desiredEnd, radii, settings, walkableNormalY, scratch,
-                          hints)
+                          hints, wallHints)
              : slideWithPlanes(world, start, desiredEnd, radii, settings, walkableNormalY, scratch,
                                hints);
 }
@@ -133,18 +134,26 @@ void snapToGround(const World& world, const Body& body, const Vec3& move, float 
   }
 }
 
-// Body::groundTriangles after `slide`: its walkable contacts' triangles,
-// each once, in the order met.
-void rememberGround(const SlideResult& slide, Body& body) {
-  std::fill(body.groundTriangles.begin(), body.groundTriangles.end(), kNoTriangle);
-  std::size_t count = 0;
-  for (int i = 0; i < slide.contactCount && count < body.groundTriangles.size(); ++i) {
-    const std::uint32_t t = slide.contacts[i].triangle;
-    if (slide.contacts[i].walkable &&
-        std::find(body.groundTriangles.begin(), body.groundTriangles.begin() + count, t) ==
-            body.groundTriangles.begin() + count)
-      body.groundTriangles[count++] = t;
-  }
+// Body::groundTriangles and wallTriangles after `slide`: the triangles of
+// its walkable contacts, and (for the exact sweep, the one method that uses
+// them) of its other contacts with a face, not an edge or a corner, each
+// once, in the order met.
+void rememberContacts(const SlideResult& slide, Body& body) {
+  auto remember = [&slide](auto& list, auto kept) {
+    std::fill(list.begin(), list.end(), kNoTriangle);
+    std::size_t count = 0;
+    for (int i = 0; i < slide.contactCount && count < list.size(); ++i) {
+      const std::uint32_t t = slide.contacts[i].triangle;
+      if (kept(slide.contacts[i]) &&
+          std::find(list.begin(), list.begin() + count, t) == list.begin() + count)
+        list[count++] = t;
+    }
+  };
+  remember(body.groundTriangles, [](const Contact& c) { return c.walkable; });
+  if (body.settings.method == CollisionMethod::ExactSweep)
+    remember(body.wallTriangles, [](const Contact& c) { return !c.walkable && !c.edge; });
+  else
+    body.wallTriangles = kNoWallTriangles;
 }
 
 // Stairs: a grounded body whose horizontal move was blocked retries it lifted
@@ -334,8 +343,9 @@ InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt
   body.lastStepPush = body.deferredPush;
   body.deferredPush = Vec3::Zero();
   const float walkableY = walkableNormalY(body.settings);
-  SlideResult slide = slideAgainstLevel(world, start, start + move, body.radii, body.settings,
-                                        walkableY, scratch, body.groundTriangles);
+  SlideResult slide =
+      slideAgainstLevel(world, start, start + move, body.radii, body.settings, walkableY, scratch,
+                        body.groundTriangles, body.wallTriangles);
   // A rounded body resting on a step's edge (not walkable ground, but
   // support) may step on as well.
   auto onEdge = [&slide] {
@@ -354,7 +364,7 @@ InvalidInput stepOne(const World& world, Body& body, const Vec3& force, float dt
   body.position = slide.end;
   detail::respondToContacts(body, slide, dt);
   body.grounded = anyWalkable(slide);
-  rememberGround(slide, body);
+  rememberContacts(slide, body);
   if (report) {
     recordSlide(world, report, slide, true);
     report->grounded = body.grounded;

@@ -59,13 +59,15 @@ SlideResult slideWithPlanes(const World& world, const Vec3& start, const Vec3& d
 
 /// Exact continuous collision in unit-sphere space (CollisionMethod::ExactSweep).
 /// `hints`: the walkable triangles the body stood on last step
-/// (Body::groundTriangles; kNoTriangle entries are skipped): a body resting
-/// on one of them at the skin's gap, its move pressing into it, slides along
-/// it from the start, where the first sweep would only have met it.
+/// (Body::groundTriangles), `wallHints` the walls it met
+/// (Body::wallTriangles); kNoTriangle entries are skipped. A body resting on
+/// one of them at the skin's gap, its move pressing into it, slides along it
+/// from the start, where a sweep would only have met it.
 SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desiredEnd,
                        EllipsoidRadii radii, const MovementSettings& settings,
                        float walkableNormalY, StepScratch& scratch,
-                       std::span<const std::uint32_t> hints = {});
+                       std::span<const std::uint32_t> hints = {},
+                       std::span<const std::uint32_t> wallHints = {});
 
 /// How far, metres, a slide's tree query reaches past the box it needs on
 /// every side: enough for its iterations (which move the end by about the
@@ -233,11 +235,13 @@ class LocalCandidates {
 };
 
 /// The narrow phase `settings.method` names. `hints`: see slideWithPlanes
-/// and slideExact.
+/// and slideExact; `wallHints`: see slideExact (the planes method ignores
+/// them).
 SlideResult slideAgainstLevel(const World& world, const Vec3& start, const Vec3& desiredEnd,
                               EllipsoidRadii radii, const MovementSettings& settings,
                               float walkableNormalY, StepScratch& scratch,
-                              std::span<const std::uint32_t> hints = {});
+                              std::span<const std::uint32_t> hints = {},
+                              std::span<const std::uint32_t> wallHints = {});
 
 /// The least normal y of a walkable contact: cos(walkableSlopeDegrees).
 /// The last slope's value is kept per thread: the cosine took 1.6% of a

@@ -232,6 +232,36 @@ TEST_CASE(
   REQUIRE(body.position.y() == Approx(0.85f + body.settings.skin).margin(1e-4));
 }
 
+TEST_CASE(
+    "with one slide allowed, a grounded body walking into the wall it rests against is refused, "
+    "its ground and wall remembered or not",
+    "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  const Level level(floorWithWall());
+  bspf::StepScratch scratch;
+  Body settled = walker({3, 0.9f, 1}, method);
+  run(level.world, settled, Vec3(40, 0, 0), 120, scratch);
+  REQUIRE(settled.grounded);
+  // Against the wall at x = 5, within the skin.
+  REQUIRE(settled.position.x() <= 5 - 0.45f);
+  REQUIRE(settled.position.x() >= 5 - 0.45f - settled.settings.skin);
+  for (const bool remembered : {true, false}) {
+    INFO((remembered ? "remembered" : "forgotten"));
+    Body body = settled;
+    if (!remembered) {
+      body.groundTriangles = bspf::kNoGroundTriangles;
+      body.wallTriangles = bspf::kNoWallTriangles;
+    }
+    body.settings.maxIterations = 1;
+    // The floor takes the one slide; the wall would need another.
+    bspf::StepReport report;
+    bspf::stepBody(level.world, body, Vec3(40, 0, 0), kDt, scratch, &report);
+    REQUIRE(report.refused);
+    REQUIRE(body.position.x() <= 5 - 0.45f);
+  }
+}
+
 TEST_CASE("a body walks up a ramp", "[runtime][movement]") {
   const bspf::CollisionMethod method = eachMethod();
   INFO("method " << nameOf(method));

@@ -180,6 +180,11 @@ inline constexpr int kGroundTriangles = 4;
 /// Body::groundTriangles of a body that stood on nothing.
 inline constexpr std::array<std::uint32_t, kGroundTriangles> kNoGroundTriangles = {
     kNoTriangle, kNoTriangle, kNoTriangle, kNoTriangle};
+/// How many wall triangles a Body remembers from its last step.
+inline constexpr int kWallTriangles = 2;
+/// Body::wallTriangles of a body that met no wall.
+inline constexpr std::array<std::uint32_t, kWallTriangles> kNoWallTriangles = {kNoTriangle,
+                                                                               kNoTriangle};
 
 struct Body {
   Vec3 position = Vec3::Zero();  ///< centre, metres
@@ -209,6 +214,17 @@ struct Body {
   /// end by float rounding, so a game that replays steps should keep them
   /// with the body's state.
   std::array<std::uint32_t, kGroundTriangles> groundTriangles = kNoGroundTriangles;
+  /// The triangles too steep to walk whose faces the body's last step
+  /// against the level met (walls), each once, the rest kNoTriangle; set by
+  /// the exact sweep's steps (a planes step leaves none). The exact sweep's
+  /// next step slides a body resting against one of them at
+  /// the skin's gap, its move pressing into it, along it from the start, as
+  /// it does on its ground (a body walking along a wall: one sweep a step,
+  /// where meeting the ground and the wall first took three). The planes
+  /// method does not use them: tested first, walls changed which surface it
+  /// met first and the crowds' paths (docs/algorithm.md). Safe with any
+  /// values, and kept by a game that replays steps, as groundTriangles.
+  std::array<std::uint32_t, kWallTriangles> wallTriangles = kNoWallTriangles;
   /// Metres: a push from other bodies (pushBodiesApart) that would have come
   /// near the level, carried into the body's next step, which moves the body
   /// by velocity * dt plus this against the level (so the push slides along
