@@ -435,10 +435,10 @@ class ExactCandidates : public LocalCandidates<detail::ExactCold, Make> {
 };
 
 // How far the unit sphere at `p` (sphere space) rests in front of the plane
-// of `tri` when it rests on the face at the gap `padding` (within rounding),
-// over the face's inside (so the face is the nearest part of the triangle),
-// and `move` presses it into the face far enough to meet it (the sweep would
-// meet the face within the move, unless something else came first); else 0.
+// of `tri` when it rests on the face at the gap `padding` (within rounding)
+// and `move` presses it into the face far enough to meet it, over the face's
+// inside both now and where it would meet it (so the sweep would meet the
+// face there, unless it met something else first); else 0.
 double restingDistance(const detail::TriangleD& tri, const Vec3& p, const Vec3& move,
                        float padding) {
   // The gap the slide leaves is made in float, about 1e-5 off in sphere
@@ -449,13 +449,18 @@ double restingDistance(const detail::TriangleD& tri, const Vec3& p, const Vec3& 
   const double side = n.dot(start - tri.a);
   const double approach = n.dot(move.cast<double>());
   if (!(std::abs(side - 1 - padding) <= kGapTolerance) || !(-approach >= side - 1)) return 0;
-  // Where the centre is over the plane, inside every edge (each edge's
-  // n . (edge x (point - its start)), as the face stage measures it).
-  const Eigen::Vector3d over = start - side * n;
+  // Over the inside of every edge (each edge's n . (edge x (point - its
+  // start)), as the face stage measures it): the centre now, and where the
+  // sweep would meet the plane (a fast body may be past the face by then,
+  // and meet what lies beyond it instead).
+  const Eigen::Vector3d meets = start + ((side - 1) / -approach) * move.cast<double>();
   const Eigen::Vector3d corners[3] = {tri.a, tri.b, tri.c};
-  for (int k = 0; k < 3; ++k) {
-    const Eigen::Vector3d& from = corners[k];
-    if (!(n.dot((corners[(k + 1) % 3] - from).cross(over - from)) > 0)) return 0;
+  for (const Eigen::Vector3d& centre : {start, meets}) {
+    const Eigen::Vector3d over = centre - n.dot(centre - tri.a) * n;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d& from = corners[k];
+      if (!(n.dot((corners[(k + 1) % 3] - from).cross(over - from)) > 0)) return 0;
+    }
   }
   return side;
 }
