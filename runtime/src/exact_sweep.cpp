@@ -435,34 +435,36 @@ class ExactCandidates : public LocalCandidates<detail::ExactCold, Make> {
 };
 
 // How far the unit sphere at `p` (sphere space) rests in front of the plane
-// of `tri` when it rests on the face at the gap `padding` (within rounding)
-// and `move` presses it into the face far enough to meet it, over the face's
-// inside both now and where it would meet it (so the sweep would meet the
-// face there, unless it met something else first); else 0.
-double restingDistance(const detail::TriangleD& tri, const Vec3& p, const Vec3& move,
-                       float padding) {
+// of `tri` when it rests there at the gap `padding` (within rounding) and
+// `move` presses it into the plane far enough to meet it; else 0.
+double restingGap(const detail::TriangleD& tri, const Eigen::Vector3d& p,
+                  const Eigen::Vector3d& move, float padding) {
   // The gap the slide leaves is made in float, about 1e-5 off in sphere
   // space at 100 m from the origin: a tenth of the default skin's.
   constexpr double kGapTolerance = 1e-4;
-  const Eigen::Vector3d start = p.cast<double>();
-  const Eigen::Vector3d& n = tri.normal;
-  const double side = n.dot(start - tri.a);
-  const double approach = n.dot(move.cast<double>());
+  const double side = tri.normal.dot(p - tri.a);
+  const double approach = tri.normal.dot(move);
   if (!(std::abs(side - 1 - padding) <= kGapTolerance) || !(-approach >= side - 1)) return 0;
-  // Over the inside of every edge (each edge's n . (edge x (point - its
-  // start)), as the face stage measures it): the centre now, and where the
-  // sweep would meet the plane (a fast body may be past the face by then,
-  // and meet what lies beyond it instead).
-  const Eigen::Vector3d meets = start + ((side - 1) / -approach) * move.cast<double>();
-  const Eigen::Vector3d corners[3] = {tri.a, tri.b, tri.c};
-  for (const Eigen::Vector3d& centre : {start, meets}) {
-    const Eigen::Vector3d over = centre - n.dot(centre - tri.a) * n;
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3d& from = corners[k];
-      if (!(n.dot((corners[(k + 1) % 3] - from).cross(over - from)) > 0)) return 0;
-    }
-  }
   return side;
+}
+
+// Whether the centre moving from `p`, `side` in front of the plane of `tri`,
+// along `move` is over the inside of the face where it meets the plane: the
+// sweep then meets the face there, unless it meets something else first (no
+// edge or corner of the triangle sooner: they lie in the plane). Checked
+// where it meets the plane, not at the start: a fast body may be past the
+// face by then, and meet what lies beyond it.
+bool meetsFace(const detail::TriangleD& tri, const Eigen::Vector3d& p, const Eigen::Vector3d& move,
+               double side) {
+  const Eigen::Vector3d meets = p + ((side - 1) / -tri.normal.dot(move)) * move;
+  const Eigen::Vector3d corners[3] = {tri.a, tri.b, tri.c};
+  for (int k = 0; k < 3; ++k) {
+    // Inside edge k: n . (edge x (point - its start)) > 0, as the face stage
+    // measures it, written (n x edge) . (point - its start).
+    const Eigen::Vector3d inward = tri.normal.cross(corners[(k + 1) % 3] - corners[k]);
+    if (!(inward.dot(meets - corners[k]) > 0)) return false;
+  }
+  return true;
 }
 
 // The world-space unit normal of a sphere-space normal: normals scale by the
@@ -621,11 +623,13 @@ SlideResult sweepAndSlide(const World& world, const Vec3& start, const Vec3& des
       const auto lane = t == kNoTriangle ? std::nullopt : local.laneOf(t);
       if (!lane) continue;
       const detail::TriangleD& face = local.made(lane->first->slot[lane->second]).sphere;
+      const Eigen::Vector3d from = p.cast<double>(), along = move.cast<double>();
+      const double side = restingGap(face, from, along, padding);
+      if (!(side > 0)) continue;
       const Vec3 faceNormal = face.normal.cast<float>();
       const Vec3 normal = worldNormal(faceNormal, toSphere);
-      if ((normal.y() >= walkableNormalY) != ground) continue;
-      const double side = restingDistance(face, p, move, padding);
-      if (!(side > 0)) continue;
+      if ((normal.y() >= walkableNormalY) != ground || !meetsFace(face, from, along, side))
+        continue;
       const Vec3 touched = (p - float(side) * faceNormal).cwiseQuotient(toSphere);
       slideAlong({0.0f, faceNormal, false}, normal, ground, touched, t);
       ++firstIteration;

@@ -262,6 +262,40 @@ TEST_CASE(
   }
 }
 
+TEST_CASE(
+    "a body running off a floor onto a ramp down meets the ramp within the frame, its ground "
+    "remembered or not",
+    "[runtime][movement]") {
+  const bspf::CollisionMethod method = eachMethod();
+  INFO("method " << nameOf(method));
+  // The floor for z < 0, then a ramp going down at 20 degrees along +z.
+  bspc::Mesh mesh = bspf::test::boxMesh({-4, -1, -20}, {4, 0, 0});
+  bspc::Mesh ramp = bspf::test::boxMesh({-4, -1, 0}, {4, 0, 20});
+  const Eigen::Matrix3d down =
+      Eigen::AngleAxisd(20 * std::numbers::pi / 180, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  for (Eigen::Vector3d& v : ramp.vertices) v = down * v;
+  bspf::test::append(mesh, ramp);
+  const Level level(mesh);
+  bspf::StepScratch scratch;
+  Body settled = walker({0, 0.9f, -0.2f}, method);
+  settled.settings.maxHorizontalSpeed = 100;
+  run(level.world, settled, Vec3::Zero(), 30, scratch);
+  REQUIRE(settled.grounded);
+  // 40 m/s towards the ramp: 0.67 m a frame, over the floor's edge.
+  settled.velocity = Vec3(0, 0, 40);
+  Body remembered = settled, forgotten = settled;
+  forgotten.groundTriangles = bspf::kNoGroundTriangles;
+  forgotten.wallTriangles = bspf::kNoWallTriangles;
+  bspf::StepReport withHints, without;
+  bspf::stepBody(level.world, remembered, Vec3::Zero(), kDt, scratch, &withHints);
+  bspf::stepBody(level.world, forgotten, Vec3::Zero(), kDt, scratch, &without);
+  INFO("remembered ends at " << remembered.position.transpose() << ", forgotten at "
+                             << forgotten.position.transpose());
+  REQUIRE(without.grounded);
+  REQUIRE(withHints.grounded);
+  REQUIRE((remembered.position - forgotten.position).norm() < 1e-3f);
+}
+
 TEST_CASE("a body walks up a ramp", "[runtime][movement]") {
   const bspf::CollisionMethod method = eachMethod();
   INFO("method " << nameOf(method));
