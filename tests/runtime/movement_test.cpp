@@ -1398,19 +1398,26 @@ bool onTriangle(const bspf::World& world, std::uint32_t t, const Vec3& p, float 
 }  // namespace
 
 TEST_CASE(
-    "a body walking on a grass floor reports contacts of surface grass at points on the floor",
+    "a body walking on a grass floor reports contacts of surface grass at points on the floor, "
+    "its ground remembered or not",
     "[runtime][movement][contacts]") {
   const Level level(grassFloorWithWall());
   const bspf::World& world = level.world;
   const auto grass = world.findSurface("grass");
   REQUIRE(grass.has_value());
   const bspf::CollisionMethod method = eachMethod();
-  INFO(nameOf(method));
+  // Forgotten, the floor is met by the narrow phase's scan, not the hint.
+  const bool remembered = GENERATE(true, false);
+  INFO(nameOf(method) << (remembered ? ", remembered" : ", forgotten"));
   Body body = walker(Vec3(0, 0.9f, 0), method);
   bspf::StepScratch scratch;
   bspf::StepReport report;
   int walkedOnGrass = 0;
   for (int frame = 0; frame < 60; ++frame) {
+    if (!remembered) {
+      body.groundTriangles = bspf::kNoGroundTriangles;
+      body.wallTriangles = bspf::kNoWallTriangles;
+    }
     bspf::stepBody(world, body, Vec3(0, 0, 40), kDt, scratch, &report);
     if (frame < 10) continue;  // landing
     REQUIRE(report.grounded);
