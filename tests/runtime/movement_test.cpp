@@ -1467,6 +1467,41 @@ TEST_CASE("a body walking into a stone wall reports a stone contact at a point o
   CHECK(metWall);
 }
 
+TEST_CASE("the exact sweep's contact with a finely tessellated wall names the triangle it touched",
+          "[runtime][movement][contacts]") {
+  // The floor, and a wall facing -x at x = 5 of 0.2 m squares (two
+  // triangles each), so that many of its triangles are candidates of every
+  // sweep into it, and only one is met.
+  bspc::Mesh mesh = floorSlab();
+  constexpr double kCell = 0.2;
+  for (int row = 0; row < 15; ++row)
+    for (int column = 0; column < 30; ++column) {
+      const double y = row * kCell, z = -3 + column * kCell;
+      const auto base = static_cast<std::uint32_t>(mesh.vertices.size());
+      for (const auto& [dy, dz] : {std::pair{0.0, 0.0}, {0.0, kCell}, {kCell, kCell}, {kCell, 0.0}})
+        mesh.vertices.emplace_back(5, y + dy, z + dz);
+      mesh.triangles.push_back({base, base + 1, base + 2});
+      mesh.triangles.push_back({base, base + 2, base + 3});
+    }
+  const Level level(mesh);
+  const bspf::World& world = level.world;
+  Body body = walker(Vec3(3, 0.9f, 0.05f), bspf::CollisionMethod::ExactSweep);
+  bspf::StepScratch scratch;
+  bspf::StepReport report;
+  int wallContacts = 0;
+  for (int frame = 0; frame < 90; ++frame) {
+    bspf::stepBody(world, body, Vec3(40, 0, 12), kDt, scratch, &report);
+    for (int c = 0; c < report.contactCount; ++c) {
+      if (!(report.contactNormals[c].x() < -0.99f)) continue;
+      INFO("frame " << frame << ", contact " << c << " at " << report.contactPoints[c].transpose()
+                    << ", triangle " << report.contactTriangles[c]);
+      ++wallContacts;
+      CHECK(onTriangle(world, report.contactTriangles[c], report.contactPoints[c], 2e-3f));
+    }
+  }
+  CHECK(wallContacts > 10);
+}
+
 TEST_CASE("a contact with another body says so with the kBodyContact sentinel",
           "[runtime][movement][contacts]") {
   const Level level(grassFloorWithWall());
