@@ -633,7 +633,7 @@ float settleOnSlope(const bspf::World& world, Body& body, bspf::StepScratch& scr
 Descent walkDownSlope(bspf::CollisionMethod method, float maxStepDown) {
   const Level level(slope(30));
   bspf::StepScratch scratch;
-  Body body = walker({}, method);
+  Body body = walker(Vec3::Zero(), method);
   body.settings.maxStepDown = maxStepDown;
   const float offset = settleOnSlope(level.world, body, scratch);
   body.velocity = Vec3(0, 0, -6);
@@ -681,7 +681,7 @@ TEST_CASE("a body whose walkable slope is lowered below its ground's slope slide
   INFO("method " << nameOf(method));
   const Level level(slope(30));
   bspf::StepScratch scratch;
-  Body body = walker({}, method);
+  Body body = walker(Vec3::Zero(), method);
   settleOnSlope(level.world, body, scratch);
   REQUIRE(body.grounded);
   const Vec3 rested = body.position;
@@ -749,7 +749,7 @@ TEST_CASE("ground snapping never holds down a jumping body, on a floor or walkin
   }
   {
     const Level level(slope(30));
-    Body body = walker({}, method);
+    Body body = walker(Vec3::Zero(), method);
     settleOnSlope(level.world, body, scratch);
     body.velocity = Vec3(0, 0, -6);
     run(level.world, body, Vec3(0, 0, -60), 10, scratch);
