@@ -125,6 +125,65 @@ TEST_CASE(
 }
 
 TEST_CASE(
+    "for a start within reach of a triangle's plane but not of the triangle, no edge or corner is "
+    "touched before the time the face stage returns, nor at all when it settles the triangle",
+    "[runtime][exact-sweep]") {
+  std::mt19937 rng(14);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int settledMovingAway = 0, boundAfterLength = 0, edgeTouched = 0;
+  for (int round = 0; round < 200000; ++round) {
+    const float size = round % 4 == 0 ? 200.0f : float(0.2 + 10 * unit(rng));
+    const Triangle tri = randomTriangle(rng, size, round % 3 == 0 ? 0.9f : 0.0f);
+    const TriangleD triangle(tri);
+    // A start beside an edge (1 to 1.5 out from it, the triangle's plane
+    // within reach), a move in any direction: away from the triangle,
+    // passing by, or onto its edge.
+    const EdgeFrame frame = edgeFrame(triangle, int(rng() % 3));
+    const Eigen::Vector3d &from = frame.from, &to = frame.to, &n = frame.normal,
+                          &outward = frame.outward;
+    const Eigen::Vector3d start = from + (to - from) * (0.1 + 0.8 * unit(rng)) +
+                                  outward * (1 + 0.5 * unit(rng)) + n * (0.95 * unit(rng));
+    const Eigen::Vector3d direction =
+        Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5).normalized();
+    const SpherePath path(start.cast<float>(), (direction * (3 * unit(rng))).cast<float>());
+    if (!(-triangle.normal.dot(triangle.a - path.start) < 1)) continue;  // not within reach
+
+    Impact face;
+    bool penetrating = false;
+    const double bound = bspf::detail::faceImpact(triangle, path, face, penetrating);
+    Impact edge;
+    bspf::detail::edgeImpact(triangle, path, edge);
+    INFO("round " << round << " bound " << bound << " edge time " << edge.time);
+    REQUIRE_FALSE(penetrating);
+    if (edge.time <= 1) ++edgeTouched;
+    const Eigen::Vector3d closest = bspf::closestPointOnTriangle<Eigen::Vector3d>(
+        path.start, triangle.a, triangle.b, triangle.c);
+    const double gap = (closest - path.start).norm() - 1;
+    if (!(bound < 1)) {
+      // Settled: no edge or corner is touched within the move.
+      REQUIRE(edge.time > 1);
+      settledMovingAway += path.move.dot(path.start - closest) > 0 && gap < path.length;
+      continue;
+    }
+    // Later than the gap over the move's whole length (the bound it
+    // improves on) by more than rounding: the edge stage, against an
+    // earlier impact at the bound (as a float), finds nothing earlier.
+    if (bound > 1.001 * gap / path.length) ++boundAfterLength;
+    Impact earlier{floatAtOrBelow(bound), Vec3::UnitY()};
+    const Impact before = earlier;
+    bspf::detail::edgeImpact(triangle, path, earlier);
+    REQUIRE(earlier.time == before.time);
+    REQUIRE(earlier.normal == before.normal);
+  }
+  // The rounds must reach every case: moves settled though long enough to
+  // reach the triangle, bounds later than the gap over the length, edges
+  // and corners touched.
+  CHECK(settledMovingAway > 5000);
+  CHECK(boundAfterLength > 5000);
+  CHECK(edgeTouched > 5000);
+}
+
+TEST_CASE(
     "the face stage gives the same answer with a triangle's last measured distance as without, "
     "on random walks near triangles within reach of their planes",
     "[runtime][exact-sweep]") {
