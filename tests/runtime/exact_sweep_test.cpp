@@ -184,6 +184,37 @@ TEST_CASE(
 }
 
 TEST_CASE(
+    "a start a hair's breadth beside a triangle's edge, moving onto it, is left open for the edge "
+    "stage, which finds the touch at once",
+    "[runtime][exact-sweep]") {
+  // The triangle in the plane y = 0, facing up, on the -z side of its edge
+  // along x; the start 0.5 above the plane and just over 1 from the edge.
+  Triangle tri;
+  tri.a = Vec3(0, 0, 0);
+  tri.b = Vec3(10, 0, 0);
+  tri.c = Vec3(0, 0, -10);
+  tri.normal = Vec3::UnitY();
+  const TriangleD triangle(tri);
+  for (const float beyond : {1e-7f, 3e-7f, 6e-7f}) {
+    const float z = float(std::sqrt(std::pow(1.0 + beyond, 2) - 0.25));
+    const SpherePath path(Vec3(5, 0.5f, z), Vec3(0, 0, -0.5f));
+    const double gap = std::hypot(0.5, double(z)) - 1;
+    INFO("beyond " << beyond << " gap " << gap);
+    REQUIRE(gap > 0);
+    REQUIRE(gap < 1e-6);
+    Impact face;
+    bool penetrating = false;
+    const double bound = bspf::detail::faceImpact(triangle, path, face, penetrating);
+    REQUIRE_FALSE(penetrating);
+    REQUIRE(bound < 1e-5);
+    Impact edge;
+    bspf::detail::edgeImpact(triangle, path, edge);
+    REQUIRE(edge.time < 1e-5f);
+    REQUIRE(edge.time >= bound);
+  }
+}
+
+TEST_CASE(
     "the face stage gives the same answer with a triangle's last measured distance as without, "
     "on random walks near triangles within reach of their planes",
     "[runtime][exact-sweep]") {
