@@ -119,8 +119,10 @@ struct MeasuredDistance {
 // corner of the triangle can be touched: its plane's, later by the time to
 // reach the triangle from where the plane was touched when that point was
 // tested and found outside, or, for a start within reach of the plane but
-// not of the triangle, the time to cover the gap; infinity when no edge or
-// corner can be touched within the move or improve on `best`. `measured`
+// not of the triangle, the time its distance takes to fall by the gap at
+// the rate it falls at the start (the distance is convex along the move, so
+// it never falls faster); infinity when no edge or corner can be touched
+// within the move or improve on `best`. `measured`
 // (optional): the triangle's last measured distance, read and kept up to
 // date; the result is the same with or without it.
 double faceImpact(const TriangleD& tri, const SpherePath& path, Impact& best, bool& penetrating,
