@@ -46,6 +46,15 @@ float floatAtOrBelow(double time) {
   return double(f) <= time ? f : std::nextafter(f, -std::numeric_limits<float>::infinity());
 }
 
+// Whether the edge stage, against an earlier impact at `time`, leaves that
+// impact as it was: no edge or corner of `triangle` is met before it.
+bool edgeStageMeetsNothingBefore(const TriangleD& triangle, const SpherePath& path, float time) {
+  Impact earlier{time, Vec3::UnitY()};
+  const Impact before = earlier;
+  bspf::detail::edgeImpact(triangle, path, earlier);
+  return earlier.time == before.time && earlier.normal == before.normal;
+}
+
 // Edge k of `triangle` (corner k to corner k + 1), its unit normal, and the
 // unit direction in the plane across the edge, out of the triangle: where
 // the tests place points near an edge.
@@ -109,13 +118,9 @@ TEST_CASE(
     ++boundAfterPlane;
     // What the slide now skips too: the edge stage against an earlier
     // impact at (as a float) the bound. It must find nothing earlier.
-    Impact earlier{latest, Vec3::UnitY()};
-    const Impact before = earlier;
-    bspf::detail::edgeImpact(triangle, path, earlier);
     INFO("round " << round << " bound " << bound << " plane " << planeTime << " edge time "
-                  << earlier.time << " rise " << triangle.rise);
-    REQUIRE(earlier.time == before.time);
-    REQUIRE(earlier.normal == before.normal);
+                  << first.time << " rise " << triangle.rise);
+    REQUIRE(edgeStageMeetsNothingBefore(triangle, path, latest));
   }
   // The rounds must reach the cases the bound is for: open triangles whose
   // edges are touched soon after the plane, the bound later than the plane.
@@ -169,11 +174,7 @@ TEST_CASE(
     // improves on) by more than rounding: the edge stage, against an
     // earlier impact at the bound (as a float), finds nothing earlier.
     if (bound > 1.001 * gap / path.length) ++boundAfterLength;
-    Impact earlier{floatAtOrBelow(bound), Vec3::UnitY()};
-    const Impact before = earlier;
-    bspf::detail::edgeImpact(triangle, path, earlier);
-    REQUIRE(earlier.time == before.time);
-    REQUIRE(earlier.normal == before.normal);
+    REQUIRE(edgeStageMeetsNothingBefore(triangle, path, floatAtOrBelow(bound)));
   }
   // The rounds must reach every case: moves settled though long enough to
   // reach the triangle, bounds later than the gap over the length, edges
