@@ -12,13 +12,15 @@
 // With `--level LEVEL.bspf --spawns FILE`, also the walkers crowd (64 and
 // 1,024 agents from the spawn points, samples/walkers_sim.h) on that level,
 // its two phases timed apart as above.
-// Prints one JSON object per case; times are medians over frames.
+// Prints one JSON object per case; times are medians over frames. `--case NAME`
+// runs one case alone (walkers, crowd, pile or threads), for a profiler.
 #include <bspf/movement.h>
 #include <bspf/thread_pool.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -128,8 +130,8 @@ void walkersOnLevel(const char* levelPath, const char* spawnsPath) {
       timePhases(*opened.world, bodies, forces, options.dt, scratch, reports, levelNs, bodyNs);
     }
     std::printf(
-        "{\"case\":\"walkers\",\"level\":\"%s\",\"bodies\":%d,\"level_phase_ns\":%.0f,"
-        "\"body_phase_ns\":%.0f,\"body_phase_share\":%.3f}\n",
+        "{\"case\":\"walkers\",\"level\":\"%s\",\"bodies\":%d,\"level_phase_ns\":%.1f,"
+        "\"body_phase_ns\":%.1f,\"body_phase_share\":%.3f}\n",
         levelPath, agents, median(levelNs), median(bodyNs),
         median(bodyNs) / (median(levelNs) + median(bodyNs)));
   }
@@ -155,17 +157,30 @@ int main(int argc, char** argv) {
   app.add_option("--spawns", spawnsPath, "Spawn points of --level, one 'x y z' a line")
       ->needs(level);
   level->needs(app.get_option("--spawns"));
+  std::string only;
+  app.add_option("--case", only,
+                 "Run only this case: walkers (needs --level), crowd, pile or threads; "
+                 "default: all (for a profiler, one case alone)")
+      ->check(CLI::IsMember({"walkers", "crowd", "pile", "threads"}));
   if (const int status = bspf::bench::parseCommandLine(app, argc, argv); status >= 0) return status;
-  if (!levelPath.empty()) walkersOnLevel(levelPath.c_str(), spawnsPath.c_str());
+  if (only == "walkers" && levelPath.empty()) {
+    std::fprintf(stderr, "bspf_crowd_bench: --case walkers needs --level and --spawns\n");
+    return 2;
+  }
+  auto runs = [&](const char* name) { return only.empty() || only == name; };
+  if (!levelPath.empty() && runs("walkers")) walkersOnLevel(levelPath.c_str(), spawnsPath.c_str());
+  if (!runs("crowd") && !runs("pile") && !runs("threads")) return 0;
   // A 400 m square floor slab, compiled in memory.
   const bspf::bench::CompiledLevel floor(bspf::bench::floorMesh(200.0), {}, "floor");
   const bspf::World& world = floor.world();
 
-  for (const int side : {8, 16, 32, 64, 128}) crowdCase(world, side, 6);
-  // The crowd running at 40 m/s: every body is swept against the others.
-  for (const int side : {32, 128}) crowdCase(world, side, 40);
+  if (runs("crowd")) {
+    for (const int side : {8, 16, 32, 64, 128}) crowdCase(world, side, 6);
+    // The crowd running at 40 m/s: every body is swept against the others.
+    for (const int side : {32, 128}) crowdCase(world, side, 40);
+  }
 
-  {
+  if (runs("pile")) {
     const int n = 10000;
     const bspf::Vec3 point(0, 0.86f, 0);
     std::vector<bspf::Body> bodies(n);
@@ -180,16 +195,26 @@ int main(int argc, char** argv) {
       frameMs.push_back(nanoseconds(start, Clock::now()) * 1e-6);
     }
     float spread = 0;
-    for (const bspf::Body& b : bodies)
+    // A digest of every final position's bits (FNV-1a), so that two builds'
+    // piles can be compared for the same trajectories.
+    std::uint64_t digest = 0xcbf29ce484222325ull;
+    for (const bspf::Body& b : bodies) {
       spread = std::max(spread, std::hypot(b.position.x(), b.position.z()));
+      for (int axis = 0; axis < 3; ++axis) {
+        std::uint32_t bits;
+        std::memcpy(&bits, &b.position[axis], sizeof bits);
+        digest = (digest ^ bits) * 0x100000001b3ull;
+      }
+    }
     std::printf(
         "{\"case\":\"pile at one point\",\"bodies\":%d,\"first_frame_ms\":%.2f,"
-        "\"median_frame_ms\":%.2f,\"max_frame_ms\":%.2f,\"spread_after_60_frames_m\":%.1f}\n",
+        "\"median_frame_ms\":%.2f,\"max_frame_ms\":%.2f,\"spread_after_60_frames_m\":%.1f,"
+        "\"positions_digest\":\"%016llx\"}\n",
         n, frameMs.front(), median(frameMs), *std::max_element(frameMs.begin(), frameMs.end()),
-        spread);
+        spread, static_cast<unsigned long long>(digest));
   }
 
-  for (int threads = 1; threads <= maxThreads; ++threads) {
+  for (int threads = 1; runs("threads") && threads <= maxThreads; ++threads) {
     std::vector<bspf::Body> bodies;
     std::vector<bspf::Vec3> forces;
     walkingCrowd(32, bodies, forces);
