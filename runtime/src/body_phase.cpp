@@ -769,6 +769,13 @@ void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> b
   detail::pushRange(world, grid, bodies, first, last, scratch, reports, caches);
 }
 
+void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> bodies,
+                     std::size_t first, std::size_t last, StepScratch& scratch, BodyCaches& caches,
+                     std::span<StepReport> reports) {
+  assert(bodies.size() <= caches.size());
+  detail::pushRange(world, grid, bodies, first, last, scratch, reports, caches.caches_);
+}
+
 namespace {
 
 // The pad, metres, of the query a push makes when the body's own query does

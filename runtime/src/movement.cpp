@@ -390,6 +390,32 @@ void stepBodiesAgainstLevel(const World& world, std::span<Body> bodies,
   detail::stepRangeAgainstLevel(world, bodies, forces, dt, scratch, reports, caches);
 }
 
+BodyCaches::BodyCaches() = default;
+BodyCaches::~BodyCaches() = default;
+BodyCaches::BodyCaches(BodyCaches&&) noexcept = default;
+BodyCaches& BodyCaches::operator=(BodyCaches&&) noexcept = default;
+void BodyCaches::resize(std::size_t bodies) { caches_.resize(bodies); }
+std::size_t BodyCaches::size() const { return caches_.size(); }
+std::uint64_t BodyCaches::queries() const {
+  std::uint64_t total = 0;
+  for (const detail::BodyCache& cache : caches_) total += cache.nearby.queries();
+  return total;
+}
+
+void stepBodiesAgainstLevel(const World& world, std::span<Body> bodies,
+                            std::span<const Vec3> forces, float dt, std::size_t first,
+                            std::size_t last, StepScratch& scratch, BodyCaches& caches,
+                            std::span<StepReport> reports) {
+  assert(forces.size() == bodies.size());
+  assert(reports.empty() || reports.size() == bodies.size());
+  assert(first <= last && last <= bodies.size() && bodies.size() <= caches.size());
+  const std::size_t count = last - first;
+  detail::stepRangeAgainstLevel(world, bodies.subspan(first, count), forces.subspan(first, count),
+                                dt, scratch,
+                                reports.empty() ? reports : reports.subspan(first, count),
+                                std::span(caches.caches_).subspan(first, count));
+}
+
 namespace {
 
 // stepBodiesAgainstLevel, saying how many bodies were not moved for

@@ -6,10 +6,13 @@
 #include <bspf/thread_pool.h>
 
 #include <algorithm>
+#include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <random>
+#include <thread>
 #include <vector>
 
 #include "support/test_support.h"
@@ -155,6 +158,65 @@ TEST_CASE("a game's own split of the two phases gives the same frame as stepBodi
     INFO("frame " << frame);
     requireSameFrame(reference.bodies, split.bodies, referenceReports, splitReports);
   }
+}
+
+TEST_CASE(
+    "a job system's two threads, each frame taking any of the ranges, give stepBodies's frames "
+    "and keep every body's tree query",
+    "[runtime][threads]") {
+  const bspf::test::CompiledMesh level(yard());
+  Crowd reference = packedCrowd(bspf::CollisionMethod::Planes);
+  Crowd jobs = reference, alone = reference;
+  const std::size_t n = reference.bodies.size();
+  std::vector<bspf::StepReport> referenceReports(n), jobReports(n), aloneReports(n);
+  bspf::StepScratch scratch, aloneScratch;
+  std::array<bspf::StepScratch, 2> threadScratches;
+  bspf::BodyCaches shared, aloneCaches;
+  shared.resize(n);
+  aloneCaches.resize(n);
+  bspf::BodyGrid grid, aloneGrid;
+  const std::vector<std::size_t> cuts{0, 7, 100, 101, 230, n};
+  const std::size_t ranges = cuts.size() - 1;
+  std::mt19937 rng(7);
+  // Each range to either thread, drawn afresh for every phase.
+  auto onTwoThreads = [&](auto&& job) {
+    std::vector<int> owner(ranges);
+    for (int& o : owner) o = int(rng() % 2);
+    auto run = [&](int thread) {
+      for (std::size_t r = 0; r < ranges; ++r)
+        if (owner[r] == thread) job(thread, cuts[r], cuts[r + 1]);
+    };
+    std::thread other(run, 1);
+    run(0);
+    other.join();
+  };
+  for (int frame = 0; frame < 20; ++frame) {
+    bspf::stepBodies(level.world, reference.bodies, reference.forces, kDt, scratch,
+                     referenceReports);
+    onTwoThreads([&](int thread, std::size_t first, std::size_t last) {
+      bspf::stepBodiesAgainstLevel(level.world, jobs.bodies, jobs.forces, kDt, first, last,
+                                   threadScratches[thread], shared, jobReports);
+    });
+    grid.build(jobs.bodies);
+    onTwoThreads([&](int thread, std::size_t first, std::size_t last) {
+      bspf::pushBodiesApart(level.world, grid, jobs.bodies, first, last, threadScratches[thread],
+                            shared, jobReports);
+    });
+    // The same crowd as one range on one thread, with caches of its own.
+    bspf::stepBodiesAgainstLevel(level.world, alone.bodies, alone.forces, kDt, 0, n, aloneScratch,
+                                 aloneCaches, aloneReports);
+    aloneGrid.build(alone.bodies);
+    bspf::pushBodiesApart(level.world, aloneGrid, alone.bodies, 0, n, aloneScratch, aloneCaches,
+                          aloneReports);
+    INFO("frame " << frame);
+    requireSameFrame(reference.bodies, jobs.bodies, referenceReports, jobReports);
+    requireSameFrame(reference.bodies, alone.bodies, referenceReports, aloneReports);
+  }
+  // Whichever thread took a body, it queried the tree no more often than
+  // on one thread: its cache went with it.
+  REQUIRE(shared.queries() == aloneCaches.queries());
+  REQUIRE(shared.queries() >= n);
+  REQUIRE(shared.size() == n);
 }
 
 TEST_CASE("a small and a big overlapping body are pushed apart by equal halves",

@@ -38,7 +38,9 @@
 // Many cores: stepBodies with a ThreadPool (bspf/thread_pool.h) runs both
 // phases in parallel; a game with its own job system calls the phases itself
 // (stepBodiesAgainstLevel on ranges, BodyGrid::build, pushBodiesApart on
-// ranges). Either way the result is bit-identical to one thread.
+// ranges, sharing one BodyCaches so that each body keeps its tree query
+// whichever thread takes it). Either way the result is bit-identical to one
+// thread.
 //
 // Thread safety: the World is only read. Scratch is the caller's: use one
 // StepScratch per thread; bodies stepped on different threads must differ.
@@ -309,6 +311,7 @@ struct StepReport {
 
 class StepScratch;
 class BodyGrid;
+class BodyCaches;
 namespace detail {
 struct StepWorkspace;  // the narrow phases' working lists, private to the runtime
 struct BodyCache;      // what one body keeps from frame to frame, likewise
@@ -421,6 +424,14 @@ inline constexpr int kSortedNeighbourBodies = 64;
 /// with its own scratch, once `grid` is built.
 void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> bodies,
                      std::size_t first, std::size_t last, StepScratch& scratch,
+                     std::span<StepReport> reports = {});
+
+/// pushBodiesApart with each body's cache kept in `caches` by its index in
+/// `bodies`, as the level phase's overload with BodyCaches keeps it.
+/// Preconditions: as pushBodiesApart, and bodies.size() <= caches.size().
+/// Thread safety: as pushBodiesApart; the concurrent calls share `caches`.
+void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> bodies,
+                     std::size_t first, std::size_t last, StepScratch& scratch, BodyCaches& caches,
                      std::span<StepReport> reports = {});
 
 /// The broad phase of the body-against-body phase, and its sweep.
@@ -649,6 +660,36 @@ class StepScratch {
 void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepScratch& scratch,
               StepReport* report = nullptr);
 
+/// What the step keeps of each body from frame to frame besides the Body
+/// itself (its tree query and the candidates made from it), by body index,
+/// for a job system's threads to share: with it a body keeps its query
+/// whichever thread steps or pushes it (see the stepBodiesAgainstLevel and
+/// pushBodiesApart overloads that take one). Results never depend on it;
+/// only the cost does. Movable, not copyable; allocates only while growing.
+class BodyCaches {
+ public:
+  BodyCaches();
+  ~BodyCaches();
+  BodyCaches(BodyCaches&&) noexcept;
+  BodyCaches& operator=(BodyCaches&&) noexcept;
+  /// Holds `bodies` bodies' caches: those of bodies [0, bodies) are kept,
+  /// any beyond are dropped, new ones start empty. Not thread-safe: call it
+  /// before a frame's jobs (when the crowd grows or shrinks).
+  void resize(std::size_t bodies);
+  std::size_t size() const;
+  /// The tree queries made through these caches since construction
+  /// (diagnostics: a body keeps its query while it stays inside it).
+  std::uint64_t queries() const;
+
+ private:
+  friend void stepBodiesAgainstLevel(const World&, std::span<Body>, std::span<const Vec3>, float,
+                                     std::size_t, std::size_t, StepScratch&, BodyCaches&,
+                                     std::span<StepReport>);
+  friend void pushBodiesApart(const World&, const BodyGrid&, std::span<Body>, std::size_t,
+                              std::size_t, StepScratch&, BodyCaches&, std::span<StepReport>);
+  std::vector<detail::BodyCache> caches_;
+};
+
 /// The level phase of stepBodies: advances each of `bodies` by `dt` against
 /// the level only, as stepBody, without the body-against-body phase.
 /// `forces` is parallel to `bodies`; `reports` is empty or parallel too (each
@@ -665,12 +706,28 @@ void stepBody(const World& world, Body& body, const Vec3& force, float dt, StepS
 /// level phase on a sub-span that does not start at 0 followed by pushes
 /// with the same scratch) queries the tree again (700 to 5,000 instructions
 /// a query on a flat floor and on oa_dm4, against 2,600 for a whole step of
-/// a walker there). stepBodies with a ThreadPool keeps every body's cache by
-/// its index, whichever thread steps it.
+/// a walker there). The overloads with BodyCaches keep every body's cache
+/// by its index, whichever thread steps it, as stepBodies with a ThreadPool
+/// does.
 /// Thread safety: as stepBody; calls on disjoint bodies may run concurrently,
 /// each with its own scratch.
 void stepBodiesAgainstLevel(const World& world, std::span<Body> bodies,
                             std::span<const Vec3> forces, float dt, StepScratch& scratch,
+                            std::span<StepReport> reports = {});
+
+/// The level phase for bodies [first, last) of a whole crowd `bodies`, each
+/// body's cache kept in `caches` by its index in `bodies`: a job system may
+/// hand any range to any thread, frame after frame, and every body keeps
+/// its tree query. Otherwise as stepBodiesAgainstLevel on that sub-span
+/// (the same trajectories, bit for bit).
+/// Preconditions: `forces` (and `reports`, unless empty) parallel to
+/// `bodies`; first <= last <= bodies.size() <= caches.size() (resize
+/// `caches` first).
+/// Thread safety: calls on disjoint ranges may run concurrently, each with
+/// its own scratch, all with the same `caches`.
+void stepBodiesAgainstLevel(const World& world, std::span<Body> bodies,
+                            std::span<const Vec3> forces, float dt, std::size_t first,
+                            std::size_t last, StepScratch& scratch, BodyCaches& caches,
                             std::span<StepReport> reports = {});
 
 /// Advances every body by `dt`: each against the level (stepBodiesAgainstLevel),
