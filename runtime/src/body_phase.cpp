@@ -761,6 +761,28 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   return true;
 }
 
+void BodyGrid::startPreparing(std::size_t bodies) { prepared_.resize(bodies); }
+
+void BodyGrid::prepare(std::span<const Body> bodies, std::size_t first, std::size_t last) {
+  assert(last <= prepared_.size() && prepared_.size() == bodies.size());
+  for (std::size_t i = first; i < last; ++i) {
+    const Body& b = bodies[i];
+    prepared_[i] = {b.position, b.lastStepStart, b.radii, b.settings.skin, sweptFast(b)};
+  }
+}
+
+void BodyGrid::buildPrepared(const BodyGrid& prepared) {
+  struct FromPrepared {
+    const std::vector<BodyGrid::Prepared>& prepared;
+    const Vec3& position(std::size_t i) const { return prepared[i].position; }
+    const Vec3& start(std::size_t i) const { return prepared[i].start; }
+    EllipsoidRadii radii(std::size_t i) const { return prepared[i].radii; }
+    float skin(std::size_t i) const { return prepared[i].skin; }
+    bool fast(std::size_t i) const { return prepared[i].fast; }
+  };
+  buildFrom(prepared.prepared_.size(), FromPrepared{prepared.prepared_});
+}
+
 void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> bodies,
                      std::size_t first, std::size_t last, StepScratch& scratch,
                      std::span<StepReport> reports) {
@@ -882,33 +904,6 @@ void stopAtBody(const World& world, Body& body, const Vec3& at, const Vec3& norm
 }  // namespace
 
 namespace detail {
-
-void startPreparingGrid(BodyGrid& grid, std::size_t bodies) { grid.prepared_.resize(bodies); }
-
-// Run by the thread that has just moved bodies [first, last), whose lines
-// are still in its core's cache.
-void prepareGridRange(BodyGrid& grid, std::span<const Body> bodies, std::size_t first,
-                      std::size_t last) {
-  assert(last <= grid.prepared_.size());
-  for (std::size_t i = first; i < last; ++i) {
-    const Body& b = bodies[i];
-    grid.prepared_[i] = {b.position, b.lastStepStart, b.radii, b.settings.skin, sweptFast(b)};
-  }
-}
-
-// Precondition: prepareGridRange has covered every body since the last
-// startPreparingGrid. Reads no body: other threads may be pushing them.
-void buildPreparedGrid(BodyGrid& grid, const BodyGrid& prepared) {
-  struct FromPrepared {
-    const std::vector<BodyGrid::Prepared>& prepared;
-    const Vec3& position(std::size_t i) const { return prepared[i].position; }
-    const Vec3& start(std::size_t i) const { return prepared[i].start; }
-    EllipsoidRadii radii(std::size_t i) const { return prepared[i].radii; }
-    float skin(std::size_t i) const { return prepared[i].skin; }
-    bool fast(std::size_t i) const { return prepared[i].fast; }
-  };
-  grid.buildFrom(prepared.prepared_.size(), FromPrepared{prepared.prepared_});
-}
 
 void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies, std::size_t first,
                std::size_t last, StepScratch& scratch, std::span<StepReport> reports,

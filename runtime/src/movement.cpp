@@ -540,7 +540,7 @@ void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3
   // measured), a walking crowd of 1,024 on a flat floor took 183 ns a body
   // on 2 threads, and 149 with the bodies prepared in place.
   BodyGrid& prepared = scratches[0].bodyGrid;  // holds the prepared inputs
-  detail::startPreparingGrid(prepared, bodies.size());
+  prepared.startPreparing(bodies.size());
   std::atomic<std::size_t> invalid{0};
   pool.parallelFor(
       bodies.size(), kBodiesPerRange, [&](int thread, std::size_t first, std::size_t last) {
@@ -553,7 +553,7 @@ void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3
         // line is shared by every thread, and an add at every range would
         // pass it from core to core.
         if (refused > 0) invalid += refused;
-        detail::prepareGridRange(prepared, bodies, first, last);
+        prepared.prepare(bodies, first, last);
       });
   if (invalid > 0) {
     if (const auto valid = validBodiesIfAnyInvalid(bodies, forces, dt)) {
@@ -574,7 +574,7 @@ void stepBodies(const World& world, std::span<Body> bodies, std::span<const Vec3
   auto buildOnce = [&](int thread) -> const BodyGrid& {
     StepScratch& scratch = scratches[std::size_t(thread)];
     if (!scratch.workspace().gridBuilt) {
-      detail::buildPreparedGrid(scratch.bodyGrid, prepared);
+      scratch.bodyGrid.buildPrepared(prepared);
       scratch.workspace().gridBuilt = true;
     }
     return scratch.bodyGrid;

@@ -161,8 +161,8 @@ TEST_CASE("a game's own split of the two phases gives the same frame as stepBodi
 }
 
 TEST_CASE(
-    "a job system's two threads, each frame taking any of the ranges, give stepBodies's frames "
-    "and keep every body's tree query",
+    "a job system's two threads, each frame taking any of the ranges and building their own "
+    "grids, give stepBodies's frames and keep every body's tree query",
     "[runtime][threads]") {
   const bspf::test::CompiledMesh level(yard());
   Crowd reference = packedCrowd(bspf::CollisionMethod::Planes);
@@ -174,7 +174,8 @@ TEST_CASE(
   bspf::BodyCaches shared, aloneCaches;
   shared.resize(n);
   aloneCaches.resize(n);
-  bspf::BodyGrid grid, aloneGrid;
+  bspf::BodyGrid prepared, aloneGrid;
+  std::array<bspf::BodyGrid, 2> grids;
   const std::vector<std::size_t> cuts{0, 7, 100, 101, 230, n};
   const std::size_t ranges = cuts.size() - 1;
   std::mt19937 rng(7);
@@ -193,14 +194,19 @@ TEST_CASE(
   for (int frame = 0; frame < 20; ++frame) {
     bspf::stepBodies(level.world, reference.bodies, reference.forces, kDt, scratch,
                      referenceReports);
+    // Each range's thread takes what the grid reads of its bodies; each
+    // pushing thread builds its own grid from that, as the pool does.
+    prepared.startPreparing(n);
     onTwoThreads([&](int thread, std::size_t first, std::size_t last) {
       bspf::stepBodiesAgainstLevel(level.world, jobs.bodies, jobs.forces, kDt, first, last,
                                    threadScratches[thread], shared, jobReports);
+      prepared.prepare(jobs.bodies, first, last);
     });
-    grid.build(jobs.bodies);
+    std::array<bool, 2> built{false, false};
     onTwoThreads([&](int thread, std::size_t first, std::size_t last) {
-      bspf::pushBodiesApart(level.world, grid, jobs.bodies, first, last, threadScratches[thread],
-                            shared, jobReports);
+      if (!built[thread]) grids[thread].buildPrepared(prepared), built[thread] = true;
+      bspf::pushBodiesApart(level.world, grids[thread], jobs.bodies, first, last,
+                            threadScratches[thread], shared, jobReports);
     });
     // The same crowd as one range on one thread, with caches of its own.
     bspf::stepBodiesAgainstLevel(level.world, alone.bodies, alone.forces, kDt, 0, n, aloneScratch,
