@@ -18,6 +18,7 @@
 #include <bspf/thread_pool.h>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -200,11 +201,8 @@ int main(int argc, char** argv) {
     std::uint64_t digest = 0xcbf29ce484222325ull;
     for (const bspf::Body& b : bodies) {
       spread = std::max(spread, std::hypot(b.position.x(), b.position.z()));
-      for (int axis = 0; axis < 3; ++axis) {
-        std::uint32_t bits;
-        std::memcpy(&bits, &b.position[axis], sizeof bits);
-        digest = (digest ^ bits) * 0x100000001b3ull;
-      }
+      for (int axis = 0; axis < 3; ++axis)
+        digest = (digest ^ std::bit_cast<std::uint32_t>(b.position[axis])) * 0x100000001b3ull;
     }
     std::printf(
         "{\"case\":\"pile at one point\",\"bodies\":%d,\"first_frame_ms\":%.2f,"
