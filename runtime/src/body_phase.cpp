@@ -644,8 +644,101 @@ struct GridCell {
 
 bool BodyGrid::findNeighboursBySorting(float width, float height) {
   const std::uint32_t n = std::uint32_t(entries_.size());
-  // The bodies, then kCentreRun places at x +infinity that end every scan below
-  // (beyond any reach: no bound to test).
+  nearHead_.assign(n, kNoNeighbour);
+  nearLinks_.clear();
+  // Whether the grid would examine `other` for `self` (it lies in one of
+  // self's 8 cells) and their boxes overlap: then each is linked to the
+  // other (pair). Measured here once for the pair's two pushes.
+  const Vec3 inverse(inverseWidth_, inverseHeight_, inverseWidth_);
+  auto withinHalfCell = [&](const Vec3& p, const Vec3& q) {
+    for (int axis = 0; axis < 3; ++axis)
+      if (!(std::abs(clampToCells(p[axis] * inverse[axis]) -
+                     clampToCells(q[axis] * inverse[axis])) < 0.5f))
+        return false;
+    return true;
+  };
+  auto cellOf = [&](const Vec3& p) {
+    GridCell c;
+    bool upper[3];
+    c.coordinates = {cellCoordinate(p.x() * inverseWidth_, upper[0]),
+                     cellCoordinate(p.y() * inverseHeight_, upper[1]),
+                     cellCoordinate(p.z() * inverseWidth_, upper[2])};
+    c.upperHalf = unsigned(upper[0]) | unsigned(upper[1]) << 1 | unsigned(upper[2]) << 2;
+    return c;
+  };
+  auto examines = [](const GridCell& self, const GridCell& other) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::uint64_t own = self.coordinates[axis],
+                          beside = self.upperHalf >> axis & 1 ? own + 1 : own - 1;
+      if (other.coordinates[axis] != own && other.coordinates[axis] != beside) return false;
+    }
+    return true;
+  };
+  auto link = [&](std::uint32_t self, std::uint32_t other, float distance, float overlap) {
+    nearLinks_.push_back({other, nearHead_[self], distance, overlap});
+    nearHead_[self] = std::uint32_t(nearLinks_.size() - 1);
+  };
+  auto pair = [&](std::uint32_t a, std::uint32_t b) __attribute__((always_inline)) {
+    const Entry &p = entries_[a], &q = entries_[b];
+    const float ax = p.position.x() - q.position.x(), ay = p.position.y() - q.position.y(),
+                az = p.position.z() - q.position.z();
+    const float reachXZ = p.radii.xz + q.radii.xz;
+    if (std::abs(ax) >= reachXZ || std::abs(az) >= reachXZ || std::abs(ay) >= p.radii.y + q.radii.y)
+      return;
+    const float distance = centreDistance(ax, ay, az);
+    const float overlap = pairOverlap(ax, ay, az, distance, p.radii, q.radii);
+    // The common case, tested before the cells themselves: the two lie less
+    // than half a cell apart along each axis in the coordinates cells are
+    // cut from (whichever half of its cell a body lies in, the neighbour on
+    // that side holds all within half a cell).
+    if (withinHalfCell(p.position, q.position)) {
+      link(a, b, distance, overlap);
+      link(b, a, distance, overlap);
+      return;
+    }
+    const GridCell cellA = cellOf(p.position), cellB = cellOf(q.position);
+    if (examines(cellA, cellB)) link(a, b, distance, overlap);
+    if (examines(cellB, cellA)) link(b, a, distance, overlap);
+  };
+
+  // No body moved more than the slack along any axis since the pairs were
+  // listed: every pair whose boxes overlap now is listed (they were then
+  // within reach plus twice the slack), and no body can have more than
+  // kMaxBodyCandidates others in its cells (see below). The list's pairs,
+  // tested as the scan tests them, give the scan's links, in another order
+  // (which nothing depends on): walkers at 6 m/s list them every few
+  // frames, and the sort and the scan were 37% of the body phase's
+  // instructions (64 agents, oa_dm4).
+  const bool comparable = listedSlack_ >= 0 && listedEntries_.size() == n &&
+                          listedWidth_ == width && listedHeight_ == height;
+  if (comparable && detail::movedWithin<Entry>(entries_, listedEntries_, listedSlack_)) {
+    ++listedBuilds_;
+    for (const std::uint64_t p : listedPairs_) pair(std::uint32_t(p >> 32), std::uint32_t(p));
+    return true;
+  }
+  // A list that served no build (a body moved further than the slack in one
+  // frame: running bodies) cost more than it spared (the wider scan, the
+  // list, the test of the moves: 70 instructions a body-step at 40 m/s on
+  // fan, oa_dm4 and oa_dm5): for a while, twice as long after each such
+  // list, the pairs are found by the plain scan, with no list. Either way
+  // they are the same pairs.
+  if (comparable && listedBuilds_ == 0) {
+    buildsUntilListingAgain_ = listingBackOff_;
+    listingBackOff_ = std::min(2 * listingBackOff_, kMostBuildsBeforeListingAgain);
+  } else if (listedBuilds_ > 0) {
+    listingBackOff_ = kLeastBuildsBeforeListingAgain;
+  }
+  const bool listing = buildsUntilListingAgain_ == 0;
+  if (!listing) --buildsUntilListingAgain_;
+  listedSlack_ = -1;
+  listedBuilds_ = 0;
+
+  // The slack of a new list: a share of the reach (a larger one lists more
+  // pairs, and the scan that lists them reads further along x).
+  const float reach = 0.5f * width, reachY = 0.5f * height;
+  const float slack = kListSlackShare * reach;
+  // The bodies, then kCentreRun places at x +infinity that end every scan
+  // below (beyond any reach: no bound to test).
   if (xOrder_.size() != n + detail::kCentreRun) {
     xOrder_.resize(n + detail::kCentreRun);
     for (std::uint32_t i = 0; i < n; ++i) xOrder_[i] = {0, 0, 0, i};
@@ -678,12 +771,16 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   if (std::isnan(notFinite)) return false;
   // The grid examines at most kMaxBodyCandidates bodies of a body's 8 cells,
   // in an order of its own: with more there, which pushers it finds depends
-  // on that order, so the grid must find them. Those cells lie within 2 cells
-  // of the body along x (in the clamped coordinates cells are cut from), so
-  // 34 bodies (it and 33 others) would lie within 4 cells of each other
-  // along x, consecutive in x order. (Testing only the runs that start at
-  // every 4th or 8th place, shorter to hold any such run, turned fan's crowd
-  // back to the grid: it has runs of 31 within 4 cells.)
+  // on that order, so the grid must find them. Those cells span 2 cells
+  // along x (in the clamped coordinates cells are cut from), so 34 bodies
+  // (it and 33 others) would lie within 2 cells of each other along x,
+  // consecutive in x order; none lie within 4. That leaves room for a
+  // list's moves: while no body moves more than the slack (a quarter of a
+  // cell; clamping shortens no distance more than the move), no 34 come
+  // within 3.5. (Testing only the runs that start at every 4th or 8th
+  // place, shorter to hold any such run, turned fan's crowd back to the
+  // grid: it has runs of 31 within 4 cells.)
+  static_assert(kListSlackShare <= 0.5f, "a list's moves keep no 34 bodies within 2 cells");
   constexpr std::uint32_t kRun = kMaxBodyCandidates + 2;
   for (std::uint32_t k = 0; k + kRun <= n; ++k)
     if (!(clampToCells(xOrder_[k + kRun - 1].x * inverseWidth_) -
@@ -691,73 +788,34 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
           4))
       return false;
 
-  // Each pair less than half a cell apart along x (no pair reaches further:
-  // cells are twice the widest body), kept, each way, when its boxes overlap
-  // (the push's own first test, as it makes it) and the grid would examine
-  // it: the other body lies in one of this one's 8 cells. It does when the
-  // two lie less than half a cell apart along each axis in the coordinates
-  // cells are cut from (whichever half of its cell a body lies in, the
-  // neighbour on that side holds all within half a cell): the common case,
-  // tested before the cells themselves.
-  const Vec3 inverse(inverseWidth_, inverseHeight_, inverseWidth_);
-  auto withinHalfCell = [&](const Vec3& p, const Vec3& q) {
-    for (int axis = 0; axis < 3; ++axis)
-      if (!(std::abs(clampToCells(p[axis] * inverse[axis]) -
-                     clampToCells(q[axis] * inverse[axis])) < 0.5f))
-        return false;
-    return true;
-  };
-  auto cellOf = [&](const Vec3& p) {
-    GridCell c;
-    bool upper[3];
-    c.coordinates = {cellCoordinate(p.x() * inverseWidth_, upper[0]),
-                     cellCoordinate(p.y() * inverseHeight_, upper[1]),
-                     cellCoordinate(p.z() * inverseWidth_, upper[2])};
-    c.upperHalf = unsigned(upper[0]) | unsigned(upper[1]) << 1 | unsigned(upper[2]) << 2;
-    return c;
-  };
-  auto examines = [](const GridCell& self, const GridCell& other) {
-    for (int axis = 0; axis < 3; ++axis) {
-      const std::uint64_t own = self.coordinates[axis],
-                          beside = self.upperHalf >> axis & 1 ? own + 1 : own - 1;
-      if (other.coordinates[axis] != own && other.coordinates[axis] != beside) return false;
-    }
-    return true;
-  };
-  nearHead_.assign(n, kNoNeighbour);
-  nearLinks_.clear();
-  auto link = [&](std::uint32_t self, std::uint32_t other, float distance, float overlap) {
-    nearLinks_.push_back({other, nearHead_[self], distance, overlap});
-    nearHead_[self] = std::uint32_t(nearLinks_.size() - 1);
-  };
-  // Half a cell is twice the largest radius (exactly: the cell's size is 4
+  // Each pair less than half a cell (plus twice the slack) apart along x:
+  // half a cell is twice the largest radius (exactly: the cell's size is 4
   // of them), so it is at least any pair's summed radii (the sum of two
-  // floats no larger rounds to no more): a pair as far apart along z or y
-  // fails the box test below, which most pairs in reach along x do. Tested
-  // first, on the centres in a row (forNearCentres).
-  const float reach = 0.5f * width, reachY = 0.5f * height;
-  auto pair = [&](const detail::SortedCentre* self, const detail::SortedCentre* other) {
-    const std::uint32_t a = self->body, b = other->body;
-    const Entry &p = entries_[a], &q = entries_[b];
-    const float ax = p.position.x() - q.position.x(), ay = p.position.y() - q.position.y(),
-                az = p.position.z() - q.position.z();
-    const float reachXZ = p.radii.xz + q.radii.xz;
-    if (std::abs(ax) >= reachXZ || std::abs(az) >= reachXZ || std::abs(ay) >= p.radii.y + q.radii.y)
-      return;
-    // Measured here once for the pair's two pushes (each body's push
-    // measured it again, with the same result).
-    const float distance = centreDistance(ax, ay, az);
-    const float overlap = pairOverlap(ax, ay, az, distance, p.radii, q.radii);
-    if (withinHalfCell(p.position, q.position)) {
-      link(a, b, distance, overlap);
-      link(b, a, distance, overlap);
-      return;
-    }
-    const GridCell cellA = cellOf(p.position), cellB = cellOf(q.position);
-    if (examines(cellA, cellB)) link(a, b, distance, overlap);
-    if (examines(cellB, cellA)) link(b, a, distance, overlap);
+  // floats no larger rounds to no more), and no pair reaches further. A pair
+  // as far apart along z or y fails the box test, which most pairs in reach
+  // along x do: tested first, on the centres in a row (forNearCentres). A
+  // pair within reach now was within reach and twice the slack when listed
+  // (its centres' differences moved by at most that; 2^-20 more covers their
+  // rounding, relative to the reach).
+  const auto pairOfCentres = [&](const detail::SortedCentre* self,
+                                 const detail::SortedCentre* other) {
+    pair(self->body, other->body);
   };
-  detail::forNearCentres(xOrder_.data(), n, reach, reachY, pair);
+  if (!listing) {
+    detail::forNearCentres(xOrder_.data(), n, reach, reachY, pairOfCentres);
+    return true;
+  }
+  const float grow = 1 + 0x1p-20f;
+  listedPairs_.clear();
+  detail::forNearCentres(xOrder_.data(), n, (reach + 2 * slack) * grow, (reachY + 2 * slack) * grow,
+                         [&](const detail::SortedCentre* self, const detail::SortedCentre* other) {
+                           listedPairs_.push_back(std::uint64_t(self->body) << 32 | other->body);
+                           pairOfCentres(self, other);
+                         });
+  listedEntries_ = entries_;
+  listedSlack_ = slack;
+  listedWidth_ = width;
+  listedHeight_ = height;
   return true;
 }
 

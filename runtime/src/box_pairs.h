@@ -3,14 +3,19 @@
 // scan (BodyGrid::sweepPairsBySorting: boxes sorted by their low x, each
 // tested against those after it that start before it ends along x), and
 // the neighbour search's (BodyGrid::findNeighboursBySorting: centres sorted
-// by x, each against those after it within reach). Private to the runtime.
+// by x, each against those after it within reach), with the test of whether
+// the bodies stayed near enough where that search last listed its pairs.
+// Private to the runtime.
 #pragma once
 
 #include <bspf/movement.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "workspace.h"  // BSPF_SSE_MASKS, and the SSE2 header where it is set
@@ -95,6 +100,54 @@ void forNearCentres(const SortedCentre* centres, std::uint32_t count, float reac
   }
 #else
   forNearCentresOneByOne(centres, count, reach, reachY, pair);
+#endif
+}
+
+/// Whether every record of `now` lies within `slack` (>= 0) of the record of
+/// `then` at its index (as long), along each axis of its `position` (a
+/// Vec3) and in its `radii.xz` (a changed radius counts as a move), with
+/// nothing there that is not finite and no NaN y radius (`radii.y`).
+/// `then` must hold finite values. The reference, one record at a time.
+template <typename Record>
+bool movedWithinOneByOne(std::span<const Record> now, std::span<const Record> then, float slack) {
+  float farthest = 0, notFinite = 0;
+  for (std::size_t i = 0; i < now.size(); ++i) {
+    const Record &e = now[i], &l = then[i];
+    const float dx = e.position.x() - l.position.x(), dy = e.position.y() - l.position.y(),
+                dz = e.position.z() - l.position.z(), dr = e.radii.xz - l.radii.xz;
+    // x - x is NaN for an infinity too, and a NaN stays in the sum.
+    notFinite += (dx - dx) + (dy - dy) + (dz - dz) + (dr - dr) + e.radii.y;
+    farthest = std::max(std::max(farthest, std::abs(dr)),
+                        std::max(std::abs(dx), std::max(std::abs(dy), std::abs(dz))));
+  }
+  return !std::isnan(notFinite) && farthest <= slack;
+}
+
+/// movedWithinOneByOne's answer. With SSE2, a record's centre and xz radius
+/// in one 4-lane difference (its first 16 bytes: `position` then
+/// `radii.xz`): the pass over a crowd's every body that a build with a
+/// listed neighbour search pays (BodyGrid::findNeighboursBySorting).
+template <typename Record>
+bool movedWithin(std::span<const Record> now, std::span<const Record> then, float slack) {
+#ifdef BSPF_SSE_MASKS
+  static_assert(offsetof(Record, position) == 0 && offsetof(Record, radii) == 12 &&
+                sizeof(Record) >= 16);
+  const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+  __m128 farthest = _mm_setzero_ps(), nan = _mm_setzero_ps();
+  float radiusY = 0;
+  for (std::size_t i = 0; i < now.size(); ++i) {
+    const __m128 d =
+        _mm_sub_ps(_mm_loadu_ps(&now[i].position.x()), _mm_loadu_ps(&then[i].position.x()));
+    // An infinite difference fails the bound; a NaN one is flagged.
+    farthest = _mm_max_ps(farthest, _mm_and_ps(d, magnitude));
+    nan = _mm_or_ps(nan, _mm_cmpunord_ps(d, d));
+    radiusY += now[i].radii.y;
+  }
+  farthest = _mm_max_ps(farthest, _mm_movehl_ps(farthest, farthest));
+  farthest = _mm_max_ss(farthest, _mm_shuffle_ps(farthest, farthest, 1));
+  return _mm_movemask_ps(nan) == 0 && !std::isnan(radiusY) && _mm_cvtss_f32(farthest) <= slack;
+#else
+  return movedWithinOneByOne(now, then, slack);
 #endif
 }
 

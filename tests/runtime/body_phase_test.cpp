@@ -856,6 +856,34 @@ TEST_CASE(
 }
 
 TEST_CASE(
+    "bodies falling onto others' heads in a small crowd are pushed as the grid's cells would "
+    "push them",
+    "[runtime][movement][bodies]") {
+  static_assert(bspf::kSortedNeighbourBodies == 64);
+  // 32 stacks in two rows along the yard's outside, 2.4 m apart along x (no
+  // 34 within 4 cells along x): a body on the floor and one of the same size
+  // dropped onto it from 2.6 to 4.15 m higher, up to 31 cm aside (so that
+  // their boxes and the bodies themselves start to overlap at nearly one
+  // height). The sorted search lists its pairs while no body has moved more
+  // than a slack since (BodyGrid): a falling body closes on the one below
+  // along y, where a list short of the slack would miss a pair the grid
+  // (with the far body, 65) finds.
+  Crowd crowd;
+  for (int i = 0; i < 64; ++i) {
+    const int stack = i / 2;
+    const bool falls = i % 2 == 1;
+    addCrowdBody(crowd, i,
+                 Vec3(-18.5f + 2.4f * float(stack % 16) + (falls ? 0.01f * float(stack) : 0),
+                      1.01f + (falls ? 2.6f + 0.05f * float(stack) : 0), stack < 16 ? 9 : -9),
+                 bspf::CollisionMethod::Planes);
+    crowd.bodies.back().radii = {0.45f, 0.85f};
+    crowd.forces.back() = Vec3::Zero();
+  }
+  const int contacts = requireSameAsWithFarBody(crowd, 60);
+  REQUIRE(contacts > 32 * 5);  // the falling bodies landed: the comparison means something
+}
+
+TEST_CASE(
     "a body at a NaN position in a small crowd's grid changes no push between the others, "
     "whatever their order",
     "[runtime][movement][bodies]") {

@@ -2,7 +2,8 @@
 // The sorted sweep's pair scan (private: runtime/src/box_pairs.h): the
 // four-at-a-time scan the body phase uses must find the same pairs, in the
 // same order, as the one-box-at-a-time reference, and the reference every
-// pair of meeting boxes with a fast body.
+// pair of meeting boxes with a fast body; likewise the neighbour search's
+// scan and its four-lane test of how far the bodies moved.
 #include "box_pairs.h"
 
 #include <algorithm>
@@ -210,4 +211,55 @@ TEST_CASE("the one-by-one neighbour scan finds every pair of centres within reac
     INFO("round " << round);
     REQUIRE(pairs == expected);
   }
+}
+
+namespace {
+
+// What the neighbour search's entries hold, as BodyGrid lays them out.
+struct Record {
+  bspf::Vec3 position;
+  bspf::EllipsoidRadii radii;
+  std::uint32_t body;
+};
+
+}  // namespace
+
+TEST_CASE(
+    "the four-lane move test answers as the one-by-one test: within the slack, beyond it, "
+    "and not finite",
+    "[runtime][bodies]") {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> place(-50, 50), move(-0.6f, 0.6f);
+  const float slack = 0.45f, nan = std::numeric_limits<float>::quiet_NaN();
+  int within = 0, beyond = 0;
+  for (int round = 0; round < 2000; ++round) {
+    const std::size_t count = 1 + rng() % 70;
+    std::vector<Record> then(count), now(count);
+    for (std::size_t i = 0; i < count; ++i) {
+      then[i] = {bspf::Vec3(place(rng), place(rng), place(rng)), {0.45f, 0.85f}, std::uint32_t(i)};
+      // Most records move a little; a round's few move up to the slack,
+      // exactly the slack, or beyond it, along one axis or in a radius.
+      now[i] = then[i];
+      now[i].position += 0.1f * bspf::Vec3(move(rng), move(rng), move(rng));
+    }
+    const std::size_t k = rng() % count;
+    switch (round % 9) {
+      case 0: now[k].position.x() = then[k].position.x() + move(rng); break;
+      case 1: now[k].position.y() = then[k].position.y() + move(rng); break;
+      case 2: now[k].position.z() = then[k].position.z() - slack; break;
+      case 3: now[k].radii.xz = then[k].radii.xz + move(rng); break;
+      case 4: now[k].position[round / 9 % 3] = nan; break;
+      case 5: now[k].position[round / 9 % 3] = kInfinity; break;
+      case 6: now[k].radii.y = round / 9 % 2 ? nan : kInfinity; break;
+      case 7: now[k].radii.xz = nan; break;
+      default: break;
+    }
+    const bool reference = bspf::detail::movedWithinOneByOne<Record>(now, then, slack);
+    INFO("round " << round);
+    REQUIRE(bspf::detail::movedWithin<Record>(now, then, slack) == reference);
+    (reference ? within : beyond) += 1;
+  }
+  // Both answers came up often: the comparison means something.
+  CHECK(within > 500);
+  CHECK(beyond > 500);
 }
