@@ -715,6 +715,31 @@ TEST_CASE("stepping fast bodies on 1, 2 or 3 threads gives bit-identical traject
   REQUIRE(stopped > 20);  // the sweep did work
 }
 
+namespace {
+
+// `count` bodies at random in an 8 m square, each having just moved in a
+// direction of its own: 1 to 3 m (too fast to be swept past each other)
+// where `fast(i)`, else 5 cm (too slow to be swept itself, but in others'
+// way). A fixed sequence from `seed` on every platform.
+template <typename Fast>
+std::vector<Body> crossingCrowd(std::size_t count, std::uint32_t seed, Fast fast) {
+  std::vector<Body> bodies(count);
+  std::uint32_t state = seed;
+  auto next = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return float(state >> 8) / float(1 << 24);
+  };
+  for (std::size_t i = 0; i < count; ++i) {
+    Body& b = bodies[i];
+    b.lastStepStart = Vec3(8 * next(), 0.851f, 8 * next());
+    const float angle = 6.2831853f * next(), length = fast(i) ? 1 + 2 * next() : 0.05f;
+    b.position = b.lastStepStart + length * Vec3(std::cos(angle), 0, std::sin(angle));
+  }
+  return bodies;
+}
+
+}  // namespace
+
 TEST_CASE(
     "a small fast crowd stops where the grid's cells would stop it: a 65th body far away "
     "changes no stop time",
@@ -724,18 +749,7 @@ TEST_CASE(
   // in four walking (too slow to be swept itself, but in others' way); with a
   // still body 1 km away, the grid's cells find the pairs instead.
   static_assert(bspf::kSortedSweepBodies == 64);
-  std::vector<Body> bodies(64);
-  std::uint32_t state = 12345;
-  auto next = [&state] {  // a fixed sequence on every platform
-    state = state * 1664525u + 1013904223u;
-    return float(state >> 8) / float(1 << 24);
-  };
-  for (std::size_t i = 0; i < bodies.size(); ++i) {
-    Body& b = bodies[i];
-    b.lastStepStart = Vec3(8 * next(), 0.851f, 8 * next());
-    const float angle = 6.2831853f * next(), length = i % 4 == 0 ? 0.05f : 1 + 2 * next();
-    b.position = b.lastStepStart + length * Vec3(std::cos(angle), 0, std::sin(angle));
-  }
+  std::vector<Body> bodies = crossingCrowd(64, 12345, [](std::size_t i) { return i % 4 != 0; });
   bspf::BodyGrid sorted;
   sorted.build(bodies);
   Body far;
@@ -751,6 +765,37 @@ TEST_CASE(
   }
   REQUIRE(cells.stopTime(64) == 1);
   REQUIRE(stopped > 20);  // the crowd met itself: the comparison means something
+}
+
+TEST_CASE(
+    "a small crowd with few fast bodies stops where the sorted sweep stops it, whatever runs far "
+    "away",
+    "[runtime][movement][sweep]") {
+  // 40 bodies in an 8 m square, 12 of them running 1 to 3 m a frame across
+  // the others (few enough that each fast box is tested against every
+  // other); with 5 more running far away (too many fast bodies for that),
+  // the sorted sweep finds the pairs instead.
+  static_assert(bspf::kSortedSweepBodies == 64);
+  std::vector<Body> bodies = crossingCrowd(40, 777, [](std::size_t i) { return i % 10 < 3; });
+  bspf::BodyGrid few;
+  few.build(bodies);
+  const std::size_t crowd = bodies.size();
+  for (int k = 0; k < 5; ++k) {
+    Body far;
+    far.lastStepStart = Vec3(500, 0.851f, 5.0f * float(k));
+    far.position = far.lastStepStart + Vec3(2, 0, 0);
+    bodies.push_back(far);
+  }
+  bspf::BodyGrid sorted;
+  sorted.build(bodies);
+  int stopped = 0;
+  for (std::size_t i = 0; i < crowd; ++i) {
+    INFO("body " << i);
+    REQUIRE(few.stopTime(i) == sorted.stopTime(i));
+    stopped += few.stopTime(i) < 1;
+  }
+  for (std::size_t i = crowd; i < bodies.size(); ++i) REQUIRE(sorted.stopTime(i) == 1);
+  REQUIRE(stopped > 8);  // the fast bodies met others: the comparison means something
 }
 
 namespace {
