@@ -487,6 +487,7 @@ void BodyGrid::sweep(std::size_t n, const Inputs& inputs, bool anyFast) {
   stops_.clear();
   if (!anyFast) return;
   movers_.resize(n);
+  std::size_t fastCount = 0;
   for (std::size_t i = 0; i < n; ++i) {
     Mover& m = movers_[i];
     const Vec3& position = inputs.position(i);
@@ -498,17 +499,16 @@ void BodyGrid::sweep(std::size_t n, const Inputs& inputs, bool anyFast) {
     m.low = m.start.cwiseMin(position) - reach;
     m.high = m.start.cwiseMax(position) + reach;
     m.fast = inputs.fast(i);
+    fastCount += m.fast;
   }
 
   sweepPairs_.clear();
-  std::size_t fastCount = 0;
-  for (std::size_t i = 0; i < n; ++i) fastCount += movers_[i].fast;
-  if (n <= kSortedSweepBodies && fastCount <= kFewFastBodies)
-    sweepPairsOfFewFast();
-  else if (n <= kSortedSweepBodies)
-    sweepPairsBySorting();
-  else
+  if (n > kSortedSweepBodies)
     sweepPairsByCells();
+  else if (fastCount <= kFewFastBodies)
+    sweepPairsOfFewFast();
+  else
+    sweepPairsBySorting();
   std::sort(sweepPairs_.begin(), sweepPairs_.end());
   sweepPairs_.erase(std::unique(sweepPairs_.begin(), sweepPairs_.end()), sweepPairs_.end());
 
