@@ -75,10 +75,15 @@ SlideResult slideExact(const World& world, const Vec3& start, const Vec3& desire
 /// query nothing. Larger pads query less often but list more triangles for
 /// every scan. Measured on walkers (callgrind, instructions per step, oa_dm1,
 /// oa_dm5, oacmpctf3, both methods) once a grounded body's scans stopped
-/// listing its floor (Body::groundTriangles): against move + 0.15 m, this is
-/// 2 to 5% cheaper at 6 m/s and within 2% at 40 m/s; move + 0.25 and
-/// move + 0.35 were as cheap at 6 m/s but 3 and 6% dearer at 40.
-inline float nearbyPad(float moveLength) { return 0.5f * moveLength + 0.3f; }
+/// listing its floor (Body::groundTriangles): against move + 0.15 m, half the
+/// move + 0.3 m was 2 to 5% cheaper at 6 m/s and within 2% at 40 m/s; move +
+/// 0.25 and move + 0.35 were as cheap at 6 m/s but 3 and 6% dearer at 40.
+/// Tuned again beside NearbyTriangles::cover's reuse rule: 0.4 of the move +
+/// 0.35 m (with that rule at 8 pads more, against half the move + 0.3 and 4
+/// pads): 0.3 to 1.1% fewer instructions a step on the shared levels at
+/// 6 m/s, 0.3 to 1.5% at 40, both methods; 0.4 + 0.4 and 0.45 + 0.35 were
+/// dearer at 40 (callgrind, 64 walkers, 300 frames).
+inline float nearbyPad(float moveLength) { return 0.4f * moveLength + 0.35f; }
 
 /// The triangles one slide's iterations test: the body's nearby triangles
 /// (StepScratch::nearby, or the body's cache in use), made into candidates for its radii once per

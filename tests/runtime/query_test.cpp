@@ -367,7 +367,7 @@ TEST_CASE(
     const bool contained = frame > 0 && (low.array() >= queriedLow.array()).all() &&
                            (high.array() <= queriedHigh.array()).all();
     const bool inside =
-        contained && (spare.array() <= 6 * pad + 0.1f + stretch.array().abs()).all();
+        contained && (spare.array() <= 10 * pad + 0.1f + stretch.array().abs()).all();
     REQUIRE(nearby.holds(world, low, high) == contained);
     if (!inside) {
       ++expectedQueries;

@@ -96,7 +96,7 @@ class NearbyTriangles {
   /// for [low, high] grown by `pad` metres on every side only when
   /// [low, high] is not inside the box last queried on this `world` (by
   /// World::id()), or when that box is larger than [low, high] by more than
-  /// 6 * pad + 0.1 m plus |ahead| along an axis (it would list too much).
+  /// 10 * pad + 0.1 m plus |ahead| along an axis (it would list too much).
   /// `ahead`, metres: a query also reaches this much further along each axis
   /// on the side it points to (where a moving body goes next).
   /// Preconditions: finite, low <= high, pad >= 0.
