@@ -201,7 +201,7 @@ void NearbyTriangles::cover(const World& world, const Vec3& low, const Vec3& hig
   // move + 0.35 m), walkers at 40 m/s took 0.3 to 1.5% fewer on the shared
   // levels, 0.8 to 7% fewer on the detailed ones, both methods; at 6 m/s
   // 0.3 to 1.2% fewer, but for 0.1 to 0.4% more on cad_building and (exact)
-  // curved_room. 12 and more pads gave the same as 8: no walker's query
+  // curved_room. 10 and more pads gave the same as 8: no walker's query
   // grew that much larger than a fresh one.
   const Vec3 spare = (high_ - low_) - (high - low);
   if (holds(world, low, high) && (spare.array() <= 10 * pad + 0.1f + ahead.array().abs()).all())
