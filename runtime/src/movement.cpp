@@ -438,8 +438,11 @@ std::size_t stepRangeAgainstLevel(const World& world, std::span<Body> bodies,
   // Each body keeps its own nearby triangles from frame to frame (swapped in,
   // no copy). A list reordered by the caller only costs re-queries: a cache
   // answers only boxes inside the one it queried, whoever asks, and the
-  // narrow phases test their candidates in triangle order, so results never
-  // depend on what a cache held.
+  // narrow phases test their candidates in triangle order, so results do
+  // not depend on what a cache held (the exact sweep's only in the last bits
+  // of a slide: its candidates keep their last face distance while their
+  // query lasts, so when a body queries again can round a slide
+  // differently; the same inputs still give the same trajectories).
   std::size_t invalid = 0;
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     swapBodyCache(scratch, caches[i]);
