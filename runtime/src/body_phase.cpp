@@ -726,17 +726,18 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
     if (examines(cellB, cellA)) link(b, a, distance, overlap);
   };
 
-  // No body moved more than the slack along any axis since the pairs were
-  // listed: every pair whose boxes overlap now is listed (they were then
-  // within reach plus twice the slack), and no body can have more than
-  // kMaxBodyCandidates others in its cells (see below). The list's pairs,
-  // tested as the scan tests them, give the scan's links, in another order
-  // (which nothing depends on): walkers at 6 m/s list them every few
-  // frames, and the sort and the scan were 37% of the body phase's
-  // instructions (64 agents, oa_dm4).
+  // No body moved more than the slack along any axis (along y, its own)
+  // since the pairs were listed: every pair whose boxes overlap now is
+  // listed (they were then within reach plus twice the slack), and no body
+  // can have more than kMaxBodyCandidates others in its cells (see below).
+  // The list's pairs, tested as the scan tests them, give the scan's links,
+  // in another order (which nothing depends on): walkers at 6 m/s list them
+  // every few frames, and the sort and the scan were 37% of the body
+  // phase's instructions (64 agents, oa_dm4).
   const bool comparable = listedSlack_ >= 0 && listedEntries_.size() == n &&
                           listedWidth_ == width && listedHeight_ == height;
-  if (comparable && detail::movedWithin<Entry>(entries_, listedEntries_, listedSlack_)) {
+  if (comparable &&
+      detail::movedWithin<Entry>(entries_, listedEntries_, listedSlack_, listedSlackY_)) {
     ++listedBuilds_;
     for (const std::uint64_t p : listedPairs_) pair(std::uint32_t(p >> 32), std::uint32_t(p));
     return true;
@@ -759,9 +760,10 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   listedBuilds_ = 0;
 
   // The slack of a new list: a share of the reach (a larger one lists more
-  // pairs, and the scan that lists them reads further along x).
+  // pairs, and the scan that lists them reads further along x), along y a
+  // share of the reach along y.
   const float reach = 0.5f * width, reachY = 0.5f * height;
-  const float slack = kListSlackShare * reach;
+  const float slack = kListSlackShare * reach, slackY = kListSlackShareY * reachY;
   // The bodies, then kCentreRun places at x +infinity that end every scan
   // below (beyond any reach: no bound to test).
   if (xOrder_.size() != n + detail::kCentreRun) {
@@ -800,11 +802,12 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   // along x (in the clamped coordinates cells are cut from), so 34 bodies
   // (it and 33 others) would lie within 2 cells of each other along x,
   // consecutive in x order; none lie within 4. That leaves room for a
-  // list's moves: while no body moves more than the slack (a quarter of a
-  // cell; clamping shortens no distance more than the move), no 34 come
-  // within 3.5. (Testing only the runs that start at every 4th or 8th
-  // place, shorter to hold any such run, turned fan's crowd back to the
-  // grid: it has runs of 31 within 4 cells.)
+  // list's moves: while no body moves more than the slack along x (a
+  // quarter of a cell; clamping shortens no distance more than the move),
+  // no 34 come within 3.5 (the slack along y counts for nothing here).
+  // (Testing only the runs that start at every 4th or 8th place, shorter to
+  // hold any such run, turned fan's crowd back to the grid: it has runs of
+  // 31 within 4 cells.)
   static_assert(kListSlackShare <= 0.5f, "a list's moves keep no 34 bodies within 2 cells");
   constexpr std::uint32_t kRun = kMaxBodyCandidates + 2;
   for (std::uint32_t k = 0; k + kRun <= n; ++k)
@@ -820,8 +823,8 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   // as far apart along z or y fails the box test, which most pairs in reach
   // along x do: tested first, on the centres in a row (forNearCentres). A
   // pair within reach now was within reach and twice the slack when listed
-  // (its centres' differences moved by at most that; 2^-20 more covers their
-  // rounding, relative to the reach).
+  // (along y, twice the slack along y; its centres' differences moved by at
+  // most that; 2^-20 more covers their rounding, relative to the reach).
   const auto pairOfCentres = [&](const detail::SortedCentre* self,
                                  const detail::SortedCentre* other) {
     pair(self->body, other->body);
@@ -832,13 +835,15 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   }
   const float grow = 1 + 0x1p-20f;
   listedPairs_.clear();
-  detail::forNearCentres(xOrder_.data(), n, (reach + 2 * slack) * grow, (reachY + 2 * slack) * grow,
+  detail::forNearCentres(xOrder_.data(), n, (reach + 2 * slack) * grow,
+                         (reachY + 2 * slackY) * grow,
                          [&](const detail::SortedCentre* self, const detail::SortedCentre* other) {
                            listedPairs_.push_back(std::uint64_t(self->body) << 32 | other->body);
                            pairOfCentres(self, other);
                          });
   listedEntries_ = entries_;
   listedSlack_ = slack;
+  listedSlackY_ = slackY;
   listedWidth_ = width;
   listedHeight_ = height;
   return true;

@@ -104,31 +104,35 @@ void forNearCentres(const SortedCentre* centres, std::uint32_t count, float reac
 }
 
 /// Whether every record of `now` lies within `slack` (>= 0) of the record of
-/// `then` at its index (as long), along each axis of its `position` (a
-/// Vec3) and in its `radii.xz` (a changed radius counts as a move), with
-/// nothing there that is not finite and no NaN y radius (`radii.y`).
-/// `then` must hold finite values. The reference, one record at a time.
+/// `then` at its index (as long) along x and z of its `position` (a Vec3)
+/// and in its `radii.xz` (a changed radius counts as a move), and within
+/// `slackY` (>= 0) along y, with nothing there that is not finite and no NaN
+/// y radius (`radii.y`). `then` must hold finite values. The reference, one
+/// record at a time.
 template <typename Record>
-bool movedWithinOneByOne(std::span<const Record> now, std::span<const Record> then, float slack) {
-  float farthest = 0, notFinite = 0;
+bool movedWithinOneByOne(std::span<const Record> now, std::span<const Record> then, float slack,
+                         float slackY) {
+  float farthest = 0, farthestY = 0, notFinite = 0;
   for (std::size_t i = 0; i < now.size(); ++i) {
     const Record &e = now[i], &l = then[i];
     const float dx = e.position.x() - l.position.x(), dy = e.position.y() - l.position.y(),
                 dz = e.position.z() - l.position.z(), dr = e.radii.xz - l.radii.xz;
     // x - x is NaN for an infinity too, and a NaN stays in the sum.
     notFinite += (dx - dx) + (dy - dy) + (dz - dz) + (dr - dr) + e.radii.y;
-    farthest = std::max(std::max(farthest, std::abs(dr)),
-                        std::max(std::abs(dx), std::max(std::abs(dy), std::abs(dz))));
+    farthest = std::max(std::max(farthest, std::abs(dr)), std::max(std::abs(dx), std::abs(dz)));
+    farthestY = std::max(farthestY, std::abs(dy));
   }
-  return !std::isnan(notFinite) && farthest <= slack;
+  return !std::isnan(notFinite) && farthest <= slack && farthestY <= slackY;
 }
 
 /// movedWithinOneByOne's answer. With SSE2, a record's centre and xz radius
 /// in one 4-lane difference (its first 16 bytes: `position` then
-/// `radii.xz`): the pass over a crowd's every body that a build with a
-/// listed neighbour search pays (BodyGrid::findNeighboursBySorting).
+/// `radii.xz`), each lane's largest against its own slack: the pass over a
+/// crowd's every body that a build with a listed neighbour search pays
+/// (BodyGrid::findNeighboursBySorting).
 template <typename Record>
-bool movedWithin(std::span<const Record> now, std::span<const Record> then, float slack) {
+bool movedWithin(std::span<const Record> now, std::span<const Record> then, float slack,
+                 float slackY) {
 #ifdef BSPF_SSE_MASKS
   static_assert(offsetof(Record, position) == 0 && offsetof(Record, radii) == 12 &&
                 sizeof(Record) >= 16);
@@ -143,11 +147,10 @@ bool movedWithin(std::span<const Record> now, std::span<const Record> then, floa
     nan = _mm_or_ps(nan, _mm_cmpunord_ps(d, d));
     radiusY += now[i].radii.y;
   }
-  farthest = _mm_max_ps(farthest, _mm_movehl_ps(farthest, farthest));
-  farthest = _mm_max_ss(farthest, _mm_shuffle_ps(farthest, farthest, 1));
-  return _mm_movemask_ps(nan) == 0 && !std::isnan(radiusY) && _mm_cvtss_f32(farthest) <= slack;
+  const __m128 within = _mm_cmple_ps(farthest, _mm_setr_ps(slack, slackY, slack, slack));
+  return _mm_movemask_ps(nan) == 0 && !std::isnan(radiusY) && _mm_movemask_ps(within) == 15;
 #else
-  return movedWithinOneByOne(now, then, slack);
+  return movedWithinOneByOne(now, then, slack, slackY);
 #endif
 }
 

@@ -902,29 +902,39 @@ TEST_CASE(
 
 TEST_CASE(
     "bodies falling onto others' heads in a small crowd are pushed as the grid's cells would "
-    "push them",
+    "push them, from within and from beyond a list's reach along y, onto bodies at rest or "
+    "jumping",
     "[runtime][movement][bodies]") {
   static_assert(bspf::kSortedNeighbourBodies == 64);
   // 32 stacks in two rows along the yard's outside, 2.4 m apart along x (no
   // 34 within 4 cells along x): a body on the floor and one of the same size
-  // dropped onto it from 2.6 to 4.15 m higher, up to 31 cm aside (so that
-  // their boxes and the bodies themselves start to overlap at nearly one
-  // height). The sorted search lists its pairs while no body has moved more
-  // than a slack since (BodyGrid): a falling body closes on the one below
-  // along y, where a list short of the slack would miss a pair the grid
-  // (with the far body, 65) finds.
+  // dropped onto it, up to 31 cm aside (so that their boxes and the bodies
+  // themselves start to overlap at nearly one height). The sorted search
+  // lists its pairs while no body has moved more than a slack since
+  // (BodyGrid; along y a slack of its own, 1.275 m for these bodies, so a
+  // list reaches 1.7 + 2 * 1.275 = 4.25 m along y): a falling body closes on
+  // the one below along y, where a list short of its reach, or kept after a
+  // longer fall, would miss a pair the grid (with the far body, 65) finds.
+  // Dropped from 2.6 to 4.15 m higher, a list holds each pair from the
+  // first frame on; from 4.3 to 5.85 m, each pair comes within reach while
+  // a list made without it lasts; onto a body jumping up at 5 m/s, the pair
+  // closes from both ends, as the list's reach of twice the slack allows.
+  const int drop = GENERATE(0, 1, 2);
+  const float above = drop == 0 ? 2.6f : 4.3f;
+  INFO((drop == 0 ? "within a list's reach" : drop == 1 ? "beyond it" : "onto jumping bodies"));
   Crowd crowd;
   for (int i = 0; i < 64; ++i) {
     const int stack = i / 2;
     const bool falls = i % 2 == 1;
     addCrowdBody(crowd, i,
                  Vec3(-18.5f + 2.4f * float(stack % 16) + (falls ? 0.01f * float(stack) : 0),
-                      1.01f + (falls ? 2.6f + 0.05f * float(stack) : 0), stack < 16 ? 9 : -9),
+                      1.01f + (falls ? above + 0.05f * float(stack) : 0), stack < 16 ? 9 : -9),
                  bspf::CollisionMethod::Planes);
     crowd.bodies.back().radii = {0.45f, 0.85f};
+    if (drop == 2 && !falls) crowd.bodies.back().velocity = Vec3(0, 5, 0);
     crowd.forces.back() = Vec3::Zero();
   }
-  const int contacts = requireSameAsWithFarBody(crowd, 60);
+  const int contacts = requireSameAsWithFarBody(crowd, 90);
   REQUIRE(contacts > 32 * 5);  // the falling bodies landed: the comparison means something
 }
 

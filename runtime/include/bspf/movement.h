@@ -643,12 +643,13 @@ class BodyGrid {
   std::vector<std::uint32_t> nearHead_;
   std::vector<NearLink> nearLinks_;
   /// The pairs findNeighboursBySorting last listed (a << 32 | b): those
-  /// within reach plus twice listedSlack_ along each axis of the entries
-  /// then (listedEntries_, by body index), in cells of listedWidth_ by
-  /// listedHeight_; listedSlack_ < 0 when there is no list.
+  /// within reach plus twice listedSlack_ along x and z, and twice
+  /// listedSlackY_ along y, of the entries then (listedEntries_, by body
+  /// index), in cells of listedWidth_ by listedHeight_; listedSlack_ < 0
+  /// when there is no list.
   std::vector<std::uint64_t> listedPairs_;
   std::vector<Entry> listedEntries_;
-  float listedSlack_ = -1, listedWidth_ = 0, listedHeight_ = 0;
+  float listedSlack_ = -1, listedSlackY_ = -1, listedWidth_ = 0, listedHeight_ = 0;
   int listedBuilds_ = 0;  ///< builds the list has served since it was made
   /// Builds left before the pairs are listed again, after a list that served
   /// none, and how many the next such list will wait (doubled after each,
@@ -662,6 +663,16 @@ class BodyGrid {
   /// and 1 cost 135, 113 and 113 instructions a body-step (walkers, 64
   /// agents, 6 m/s, oa_dm4; 142 without a list).
   static constexpr float kListSlackShare = 0.5f;
+  /// The slack along y, as a share of the reach along y (half a cell's
+  /// height). Its own, because falling bodies move along y: on fan, 255 of
+  /// the 262 lists that ended in 600 frames ended on a move along y alone
+  /// (walkers, 64 agents, 6 m/s). Free of the cell-count bound, which
+  /// counts along x. 0.5, 0.75 and 1 cost 150, 143 and 142 instructions a
+  /// body-step in BodyGrid::build on fan (168 with the x slack along y),
+  /// 131.7, 128.5 and 128.5 on oacmpdm5 (149.9); the lists hold more pairs
+  /// one above the other: cad_building, whose floors lie 3 m apart, 123
+  /// with each (111).
+  static constexpr float kListSlackShareY = 0.75f;
 };
 
 /// Per-thread scratch for the step. Reusable across worlds and frames; it
