@@ -996,18 +996,26 @@ namespace detail {
 void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies, std::size_t first,
                std::size_t last, StepScratch& scratch, std::span<StepReport> reports,
                std::span<BodyCache> caches) {
-  if (grid.entries_.size() < 2) return;
+  if (grid.entries_.size() < 2 || first >= last) return;
   // Most bodies of a small crowd have no other near them and were not
-  // stopped by the sweep: a tight loop passes over them (the full loop's
-  // head, with its spilled pointers, took 28 instructions a body).
-  auto alone = [&](std::size_t i) {
-    return grid.nearHead_[i] == BodyGrid::kNoNeighbour &&
-           (grid.stops_.empty() || !(grid.stops_[i].time < 1));
-  };
+  // stopped by the sweep: the pass visits only the others, by their bits
+  // (the full loop's head, with its spilled pointers, took 28 instructions
+  // a body; a tight loop over every body's head, 8 a body-step on fan).
+  std::uint64_t visit = 0;
+  if (grid.sortedNeighbours_) {
+    visit = detail::linkedBits(grid.nearHead_, BodyGrid::kNoNeighbour);
+    if (!grid.stops_.empty())
+      for (std::size_t i = first; i < last; ++i)
+        if (grid.stops_[i].time < 1) visit |= std::uint64_t(1) << i;
+    // [first, last): first < last <= 64 here.
+    visit &= ~((std::uint64_t(1) << first) - 1);
+    if (last < 64) visit &= (std::uint64_t(1) << last) - 1;
+  }
   for (std::size_t i = first; i < last; ++i) {
     if (grid.sortedNeighbours_) {
-      while (i < last && alone(i)) ++i;
-      if (i == last) break;
+      if (visit == 0) break;
+      i = std::size_t(std::countr_zero(visit));
+      visit &= visit - 1;
     }
     Body& body = bodies[i];
     const BodyGrid::Entry& self =

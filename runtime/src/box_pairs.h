@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cassert>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -151,6 +152,36 @@ bool movedWithin(std::span<const Record> now, std::span<const Record> then, floa
   return _mm_movemask_ps(nan) == 0 && !std::isnan(radiusY) && _mm_movemask_ps(within) == 15;
 #else
   return movedWithinOneByOne(now, then, slack, slackY);
+#endif
+}
+
+/// Bit i set where `heads[i]` is not `none`: which of at most 64 bodies
+/// have a link (BodyGrid::nearHead_). The reference, one at a time.
+inline std::uint64_t linkedBitsOneByOne(std::span<const std::uint32_t> heads, std::uint32_t none) {
+  assert(heads.size() <= 64);
+  std::uint64_t bits = 0;
+  for (std::size_t i = 0; i < heads.size(); ++i) bits |= std::uint64_t(heads[i] != none) << i;
+  return bits;
+}
+
+/// linkedBitsOneByOne's answer; with SSE2, four heads a comparison.
+inline std::uint64_t linkedBits(std::span<const std::uint32_t> heads, std::uint32_t none) {
+#ifdef BSPF_SSE_MASKS
+  assert(heads.size() <= 64);
+  const __m128i noneLanes = _mm_set1_epi32(int(none));
+  std::uint64_t unlinked = 0;
+  std::size_t i = 0;
+  for (; i + 4 <= heads.size(); i += 4) {
+    const __m128i h = _mm_loadu_si128(reinterpret_cast<const __m128i*>(heads.data() + i));
+    unlinked |= std::uint64_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(h, noneLanes))))
+                << i;
+  }
+  for (; i < heads.size(); ++i) unlinked |= std::uint64_t(heads[i] == none) << i;
+  const std::uint64_t all =
+      heads.size() == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << heads.size()) - 1;
+  return ~unlinked & all;
+#else
+  return linkedBitsOneByOne(heads, none);
 #endif
 }
 

@@ -281,3 +281,27 @@ TEST_CASE(
   CHECK(within > 500);
   CHECK(beyond > 500);
 }
+
+TEST_CASE("the four-lane link bits answer as the one-by-one bits, for every crowd size to 64",
+          "[runtime][bodies]") {
+  std::mt19937 rng(11);
+  constexpr std::uint32_t kNone = ~std::uint32_t(0);
+  int linked = 0, unlinked = 0;
+  for (std::size_t count = 0; count <= 64; ++count)
+    for (int round = 0; round < 20; ++round) {
+      std::vector<std::uint32_t> heads(count);
+      // Unlinked most often, as in a walking crowd; a link's index may be
+      // anything but `none` (0 included).
+      for (std::uint32_t& h : heads) h = rng() % 4 == 0 ? std::uint32_t(rng() % 3) : kNone;
+      const std::uint64_t reference = bspf::detail::linkedBitsOneByOne(heads, kNone);
+      INFO("bodies " << count << ", round " << round);
+      REQUIRE(bspf::detail::linkedBits(heads, kNone) == reference);
+      for (std::size_t i = 0; i < count; ++i) {
+        REQUIRE((reference >> i & 1) == (heads[i] != kNone ? 1u : 0u));
+        (heads[i] != kNone ? linked : unlinked) += 1;
+      }
+      if (count < 64) REQUIRE(reference >> count == 0);
+    }
+  CHECK(linked > 1000);
+  CHECK(unlinked > 1000);
+}
