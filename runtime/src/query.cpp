@@ -181,11 +181,6 @@ void collectBoxCandidates(const World& world, const Vec3& low, const Vec3& high,
       });
 }
 
-bool NearbyTriangles::holds(const World& world, const Vec3& low, const Vec3& high) const {
-  return worldId_ == world.id() && (low.array() >= low_.array()).all() &&
-         (high.array() <= high_.array()).all();
-}
-
 void NearbyTriangles::cover(const World& world, const Vec3& low, const Vec3& high, float pad,
                             SweepScratch& scratch, const Vec3& ahead) {
   // Reused while it holds the box, unless it is far larger than a query

@@ -107,7 +107,10 @@ class NearbyTriangles {
   /// contains [low, high]. Unlike cover(), it accepts a box however much
   /// larger: for a one-off test near a body, reusing the body's list costs
   /// less than a query. Preconditions: finite, low <= high.
-  bool holds(const World& world, const Vec3& low, const Vec3& high) const;
+  bool holds(const World& world, const Vec3& low, const Vec3& high) const {
+    return worldId_ == world.id() && (low.array() >= low_.array()).all() &&
+           (high.array() <= high_.array()).all();
+  }
   /// Forgets the last query, so the next cover() queries again.
   void clear() { worldId_ = 0; }
   /// The triangles of the last query, in leaf order, with their boxes.
