@@ -892,37 +892,6 @@ namespace {
 // not hold the push's box (plus twice the push's length, as a slide's).
 constexpr float kPushQueryPad = 0.3f;
 
-// sweptBounds(from, to, radii) grown by `margin` on every side, the same
-// floats. With SSE2 in four lanes (x, y, z, z again), the same operations
-// lane by lane (Eigen's took 70 instructions a call; a call a push).
-Bounds pushBounds(const Vec3& from, const Vec3& to, EllipsoidRadii radii, float margin) {
-#ifdef BSPF_SSE_MASKS
-  const __m128 a = _mm_setr_ps(from.x(), from.y(), from.z(), from.z()),
-               b = _mm_setr_ps(to.x(), to.y(), to.z(), to.z()),
-               extent = _mm_setr_ps(radii.xz, radii.y, radii.xz, radii.xz);
-  const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
-  // min and max may pick the other of two equal values (-0 for +0): minus
-  // or plus a radius, the same float.
-  __m128 low = _mm_sub_ps(_mm_min_ps(a, b), extent), high = _mm_add_ps(_mm_max_ps(a, b), extent);
-  // padBounds' pad: the margin plus 4e-7 of the larger magnitude.
-  const __m128 pad =
-      _mm_add_ps(_mm_set1_ps(kSweepMarginMetres),
-                 _mm_mul_ps(_mm_set1_ps(4e-7f),
-                            _mm_max_ps(_mm_and_ps(low, magnitude), _mm_and_ps(high, magnitude))));
-  low = _mm_sub_ps(_mm_sub_ps(low, pad), _mm_set1_ps(margin));
-  high = _mm_add_ps(_mm_add_ps(high, pad), _mm_set1_ps(margin));
-  alignas(16) float l[4], h[4];
-  _mm_store_ps(l, low);
-  _mm_store_ps(h, high);
-  return {Vec3(l[0], l[1], l[2]), Vec3(h[0], h[1], h[2])};
-#else
-  Bounds box = sweptBounds(from, to, radii);
-  box.low.array() -= margin;
-  box.high.array() += margin;
-  return box;
-#endif
-}
-
 // Whether a body with `radii` moving its centre from `from` to `to` keeps
 // clear of every triangle by more than a quarter of its skin: each triangle
 // whose box meets the box of the move is that far beyond the body's extent
@@ -935,7 +904,7 @@ Bounds pushBounds(const Vec3& from, const Vec3& to, EllipsoidRadii radii, float 
 bool touchesNothing(const World& world, const Vec3& from, const Vec3& to, EllipsoidRadii radii,
                     float skin, detail::BodyCache& cache, SweepScratch& sweep) {
   const float margin = 0.25f * skin;
-  const Bounds box = pushBounds(from, to, radii, margin);
+  const Bounds box = detail::pushBounds(from, to, radii, margin);
   // The body's own query, whenever it holds the box, however much larger
   // (cover() would query again for a box far smaller than the query's: at
   // 40 m/s, about 1 push in 15 did, and the body's next step then queried

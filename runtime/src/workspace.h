@@ -155,6 +155,38 @@ struct alignas(32) CandidateBlock {
   float afterHigh = 0;
 };
 
+/// sweptBounds(from, to, radii) grown by `margin` (metres) on every side,
+/// the same floats: the box a push's clearance test reads candidates in.
+/// With SSE2 in four lanes (x, y, z, z again), the same operations lane by
+/// lane (Eigen's took 70 instructions a call; a call a push).
+inline Bounds pushBounds(const Vec3& from, const Vec3& to, EllipsoidRadii radii, float margin) {
+#ifdef BSPF_SSE_MASKS
+  const __m128 a = _mm_setr_ps(from.x(), from.y(), from.z(), from.z()),
+               b = _mm_setr_ps(to.x(), to.y(), to.z(), to.z()),
+               extent = _mm_setr_ps(radii.xz, radii.y, radii.xz, radii.xz);
+  const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+  // min and max may pick the other of two equal values (-0 for +0): minus
+  // or plus a radius, the same float.
+  __m128 low = _mm_sub_ps(_mm_min_ps(a, b), extent), high = _mm_add_ps(_mm_max_ps(a, b), extent);
+  // padBounds' pad: kSweepMarginMetres plus 4e-7 of the larger magnitude.
+  const __m128 pad =
+      _mm_add_ps(_mm_set1_ps(kSweepMarginMetres),
+                 _mm_mul_ps(_mm_set1_ps(4e-7f),
+                            _mm_max_ps(_mm_and_ps(low, magnitude), _mm_and_ps(high, magnitude))));
+  low = _mm_sub_ps(_mm_sub_ps(low, pad), _mm_set1_ps(margin));
+  high = _mm_add_ps(_mm_add_ps(high, pad), _mm_set1_ps(margin));
+  alignas(16) float l[4], h[4];
+  _mm_store_ps(l, low);
+  _mm_store_ps(h, high);
+  return {Vec3(l[0], l[1], l[2]), Vec3(h[0], h[1], h[2])};
+#else
+  Bounds box = sweptBounds(from, to, radii);
+  box.low.array() -= margin;
+  box.high.array() += margin;
+  return box;
+#endif
+}
+
 /// The test a scan makes of each block before its mask: whether the
 /// block's box overlaps `box` (touching counts), as boxesOverlap. With SSE,
 /// each box in one four-lane load (a block's low and high are adjacent) and

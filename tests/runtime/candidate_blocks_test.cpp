@@ -6,6 +6,7 @@
 // near each box it asks for.
 #include <bit>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <limits>
 #include <random>
 #include <set>
@@ -211,4 +212,35 @@ TEST_CASE("the six-plane test with SSE agrees with the plane-by-plane reference"
   }
   CHECK(inside > 1000);  // both outcomes exercised
   CHECK(inside < 19000);
+}
+
+TEST_CASE("a push's four-lane clearance box has the bits of the swept box grown by the margin",
+          "[runtime][bodies]") {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> unit(-1, 1);
+  int moved = 0;
+  for (int round = 0; round < 20000; ++round) {
+    // Coordinates from centimetres to 100 km (the pad grows with them), a
+    // push of up to a metre, none at all, or between +0 and -0.
+    const float scale = std::pow(10.0f, float(round % 8) - 2);
+    const bspf::Vec3 from(scale * unit(rng), scale * unit(rng), scale * unit(rng));
+    bspf::Vec3 to = from + bspf::Vec3(unit(rng), 0.1f * unit(rng), unit(rng));
+    if (round % 5 == 0) to = from;
+    const bool zeros = round % 7 == 0;
+    const bspf::Vec3 zeroFrom(0.0f, -0.0f, 0.0f), zeroTo(-0.0f, 0.0f, -0.0f);
+    const bspf::EllipsoidRadii radii{0.2f + 0.5f * std::abs(unit(rng)),
+                                     0.3f + 0.8f * std::abs(unit(rng))};
+    const float margin = 0.25f * 0.02f * (1 + std::abs(unit(rng)));
+    const bspf::Vec3& a = zeros ? zeroFrom : from;
+    const bspf::Vec3& b = zeros ? zeroTo : to;
+    bspf::Bounds expected = bspf::sweptBounds(a, b, radii);
+    expected.low.array() -= margin;
+    expected.high.array() += margin;
+    const bspf::Bounds box = bspf::detail::pushBounds(a, b, radii, margin);
+    INFO("round " << round);
+    REQUIRE((box.low.array() == expected.low.array()).all());
+    REQUIRE((box.high.array() == expected.high.array()).all());
+    moved += !(a == b);
+  }
+  CHECK(moved > 10000);  // most boxes are of a move, not of a point
 }
