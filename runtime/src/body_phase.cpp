@@ -222,23 +222,12 @@ bool movedFast(const Body& b) {
          least * least * a2 * b2;
 }
 
-// Whether movedFast(b) is false because the move is shorter than
-// kSweepMinMove times the smaller radius, to spare 1% for rounding (a carried
-// push only makes a move less fast): half the instructions, for the bodies
-// of nearly every frame.
-bool movedSurelySlow(const Body& b) {
-  constexpr float kSlowSquared = 0.99f * kSweepMinMove * kSweepMinMove;
-  const Vec3 move = b.position - b.lastStepStart;
-  const float radius = std::min(b.radii.xz, b.radii.y);
-  return move.squaredNorm() <= kSlowSquared * (radius * radius);
-}
-
 // Whether the sweep takes body `b`'s move (movedFast), the cheap test first:
 // what BodyGrid::build and the prepared inputs both ask of every body. Forced
 // inline: GCC kept it out of line in the build's first pass, 10 instructions
 // a body-step more (walkers, oa_dm4).
 [[gnu::always_inline]] inline bool sweptFast(const Body& b) {
-  return !movedSurelySlow(b) && movedFast(b);
+  return !detail::movedSurelySlow(b) && movedFast(b);
 }
 
 }  // namespace
@@ -550,6 +539,7 @@ void BodyGrid::build(std::span<const Body> bodies) {
     EllipsoidRadii radii(std::size_t i) const { return bodies[i].radii; }
     float skin(std::size_t i) const { return bodies[i].settings.skin; }
     bool fast(std::size_t i) const { return sweptFast(bodies[i]); }
+    detail::CrowdScan scan(std::size_t) const { return detail::scanCrowd(bodies, movedFast); }
   };
   buildFrom(bodies.size(), FromBodies{bodies});
 }
@@ -561,15 +551,11 @@ void BodyGrid::buildFrom(std::size_t n, const Inputs& inputs) {
   // apart on each axis, so a body's overlaps lie in its own cell and the
   // neighbour on the nearer side along each axis (8 cells, not 27: each
   // look-up is a likely cache miss).
-  // In the same pass, whether any body moved fast (movedFast).
-  float width = 0, height = 0;
-  bool anyFast = false;
-  for (std::size_t i = 0; i < n; ++i) {
-    const EllipsoidRadii radii = inputs.radii(i);
-    width = std::max(width, 4 * radii.xz);
-    height = std::max(height, 4 * radii.y);
-    anyFast = anyFast || inputs.fast(i);
-  }
+  // In the same pass, whether any body moved fast (movedFast): inputs.scan,
+  // four bodies at a time for the bodies themselves (detail::scanCrowd).
+  const detail::CrowdScan scan = inputs.scan(n);
+  const float width = scan.width, height = scan.height;
+  const bool anyFast = scan.anyFast;
   inverseWidth_ = width > 0 ? 1 / width : 1;
   inverseHeight_ = height > 0 ? 1 / height : 1;
   // The sweep stops fast bodies where they first meet another; the grid
@@ -867,6 +853,15 @@ void BodyGrid::buildPrepared(const BodyGrid& prepared) {
     EllipsoidRadii radii(std::size_t i) const { return prepared[i].radii; }
     float skin(std::size_t i) const { return prepared[i].skin; }
     bool fast(std::size_t i) const { return prepared[i].fast; }
+    detail::CrowdScan scan(std::size_t n) const {
+      detail::CrowdScan crowd;
+      for (std::size_t i = 0; i < n; ++i) {
+        crowd.width = std::max(crowd.width, 4 * prepared[i].radii.xz);
+        crowd.height = std::max(crowd.height, 4 * prepared[i].radii.y);
+        crowd.anyFast = crowd.anyFast || prepared[i].fast;
+      }
+      return crowd;
+    }
   };
   buildFrom(prepared.prepared_.size(), FromPrepared{prepared.prepared_});
 }

@@ -3,7 +3,8 @@
 // four-at-a-time scan the body phase uses must find the same pairs, in the
 // same order, as the one-box-at-a-time reference, and the reference every
 // pair of meeting boxes with a fast body; likewise the neighbour search's
-// scan and its four-lane test of how far the bodies moved.
+// scan and its four-lane test of how far the bodies moved, and the
+// four-at-a-time pass over a crowd that opens each build (scanCrowd).
 #include "box_pairs.h"
 
 #include <algorithm>
@@ -304,4 +305,78 @@ TEST_CASE("the four-lane link bits answer as the one-by-one bits, for every crow
     }
   CHECK(linked > 1000);
   CHECK(unlinked > 1000);
+}
+
+TEST_CASE(
+    "the four-at-a-time crowd scan gives the one-by-one scan's cell size and asks movedFast of "
+    "the same bodies",
+    "[runtime][bodies]") {
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<float> place(-50, 50), unit(-1, 1), share(0.95f, 1.03f);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  int asked = 0, fast = 0, slowCrowds = 0;
+  for (int round = 0; round < 3000; ++round) {
+    const std::size_t count = rng() % 70;
+    std::vector<bspf::Body> bodies(count);
+    for (std::size_t i = 0; i < count; ++i) {
+      bspf::Body& b = bodies[i];
+      b.radii = {0.2f + 0.5f * std::abs(unit(rng)), 0.3f + 0.8f * std::abs(unit(rng))};
+      b.lastStepStart = bspf::Vec3(place(rng), place(rng), place(rng));
+      // Moves about the surely-slow bound (half the smaller radius, less 1%)
+      // in every direction, or short; what follows each vector in the body
+      // (velocity, a ground triangle's index) anything.
+      const float radius = std::min(b.radii.xz, b.radii.y);
+      const float length = rng() % 4 == 0 ? 0.5f * radius * share(rng) : 0.1f * radius;
+      const bspf::Vec3 direction = bspf::Vec3(unit(rng), unit(rng), unit(rng)).normalized();
+      b.position = b.lastStepStart + length * direction;
+      b.velocity = bspf::Vec3(place(rng), unit(rng), place(rng));
+      b.groundTriangles[0] = std::uint32_t(rng() % 5000);
+    }
+    if (count > 0) {
+      bspf::Body& b = bodies[rng() % count];
+      switch (round % 12) {
+        case 0: b.radii.xz = nan; break;
+        case 1: b.radii.y = nan; break;
+        case 2: b.position.y() = nan; break;
+        case 3: b.position.x() = kInfinity; break;
+        case 4: b.radii.y = 3; break;  // the tallest, anywhere in the crowd
+        default: break;
+      }
+    }
+    // Fast where the move is longer than 0.497 of the smaller radius: a
+    // test, not the step's; which bodies are asked is what is compared.
+    std::vector<const bspf::Body*> askedByReference, askedByLanes;
+    auto movedFast = [](std::vector<const bspf::Body*>& log) {
+      return [&log](const bspf::Body& b) {
+        log.push_back(&b);
+        const float radius = std::min(b.radii.xz, b.radii.y);
+        return (b.position - b.lastStepStart).norm() > 0.497f * radius;
+      };
+    };
+    const bspf::detail::CrowdScan reference =
+        bspf::detail::scanCrowdOneByOne(bodies, movedFast(askedByReference));
+    const bspf::detail::CrowdScan lanes = bspf::detail::scanCrowd(bodies, movedFast(askedByLanes));
+    INFO("round " << round << ", bodies " << count);
+    REQUIRE(std::bit_cast<std::uint32_t>(lanes.width) ==
+            std::bit_cast<std::uint32_t>(reference.width));
+    REQUIRE(std::bit_cast<std::uint32_t>(lanes.height) ==
+            std::bit_cast<std::uint32_t>(reference.height));
+    REQUIRE(lanes.anyFast == reference.anyFast);
+    REQUIRE(askedByLanes == askedByReference);
+    asked += int(askedByReference.size());
+    fast += reference.anyFast;
+    slowCrowds += count > 0 && !reference.anyFast;
+  }
+  // Bodies near the bound were asked, crowds with and without a fast body.
+  CHECK(asked > 2000);
+  CHECK(fast > 1000);
+  CHECK(slowCrowds > 300);
+  // The reference's bound: a move of 0.49 of the smaller radius is surely
+  // slow, one of 0.5 is not.
+  bspf::Body body;
+  body.radii = {0.45f, 0.85f};
+  body.position = body.lastStepStart + bspf::Vec3(0.49f * 0.45f, 0, 0);
+  CHECK(bspf::detail::movedSurelySlow(body));
+  body.position = body.lastStepStart + bspf::Vec3(0, 0, 0.5f * 0.45f);
+  CHECK_FALSE(bspf::detail::movedSurelySlow(body));
 }
