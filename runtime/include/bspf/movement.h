@@ -515,8 +515,10 @@ class BodyGrid {
     bool fast;   ///< movedFast
   };
   /// build, given what it reads of each of `n` bodies (by index i < n:
-  /// position(i), start(i), radii(i), skin(i), fast(i)); it reads nothing
-  /// else of them.
+  /// position(i), start(i), radii(i), skin(i), fast(i); scan(n), their cell
+  /// size and whether any is fast; placeEntries(entries), each body's entry
+  /// where it ends unless the sweep stops it); it reads nothing else of
+  /// them.
   template <typename Inputs>
   void buildFrom(std::size_t n, const Inputs& inputs);
   struct Entry {
