@@ -226,8 +226,11 @@ CrowdScan scanCrowdOneByOne(std::span<const Body> bodies, MovedFast&& movedFast)
 /// loads, each move in one four-lane difference (position and lastStepStart
 /// with the lane after each: velocity.x, and the start's lane cleared), its
 /// square summed as Eigen's squaredNorm sums it ((x + y) + z, so the same
-/// float as movedSurelySlow's). One body at a time it was 23 instructions
-/// a body-step, a tenth of the body phase's (walkers, 64 agents, fan).
+/// float as movedSurelySlow's; were a build to round otherwise, say with
+/// FMA, a body that one calls surely slow and the other not lies within 1%
+/// of the bound, where movedFast is false: anyFast is the same either way).
+/// One body at a time it was 23 instructions a body-step, a tenth of the
+/// body phase's (walkers, 64 agents, fan).
 template <typename MovedFast>
 CrowdScan scanCrowd(std::span<const Body> bodies, MovedFast&& movedFast) {
 #ifdef BSPF_SSE_MASKS
