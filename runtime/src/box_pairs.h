@@ -208,16 +208,21 @@ struct CrowdScan {
   bool anyFast = false;
 };
 
-/// The reference: one body at a time, `movedFast(b)` asked for each body
-/// not surely slow until one is fast.
+/// Adds body `b` to `scan`: its radii to the cell size and, unless a body
+/// before it was fast, whether it is (movedFast asked only where the move
+/// is not surely slow).
+template <typename MovedFast>
+void scanBody(CrowdScan& scan, const Body& b, MovedFast& movedFast) {
+  scan.width = std::max(scan.width, 4 * b.radii.xz);
+  scan.height = std::max(scan.height, 4 * b.radii.y);
+  scan.anyFast = scan.anyFast || (!movedSurelySlow(b) && movedFast(b));
+}
+
+/// The reference: one body at a time (scanBody).
 template <typename MovedFast>
 CrowdScan scanCrowdOneByOne(std::span<const Body> bodies, MovedFast&& movedFast) {
   CrowdScan scan;
-  for (const Body& b : bodies) {
-    scan.width = std::max(scan.width, 4 * b.radii.xz);
-    scan.height = std::max(scan.height, 4 * b.radii.y);
-    scan.anyFast = scan.anyFast || (!movedSurelySlow(b) && movedFast(b));
-  }
+  for (const Body& b : bodies) scanBody(scan, b, movedFast);
   return scan;
 }
 
@@ -279,12 +284,7 @@ CrowdScan scanCrowd(std::span<const Body> bodies, MovedFast&& movedFast) {
     scan.height = std::max(scan.height, tall[lane]);
   }
   scan.anyFast = anyFast;
-  for (; i < bodies.size(); ++i) {
-    const Body& b = bodies[i];
-    scan.width = std::max(scan.width, 4 * b.radii.xz);
-    scan.height = std::max(scan.height, 4 * b.radii.y);
-    scan.anyFast = scan.anyFast || (!movedSurelySlow(b) && movedFast(b));
-  }
+  for (; i < bodies.size(); ++i) scanBody(scan, bodies[i], movedFast);
   return scan;
 #else
   return scanCrowdOneByOne(bodies, movedFast);
