@@ -925,7 +925,8 @@ constexpr float kPushQueryPad = 0.3f;
 // a body resting on a floor is a whole skin above it. `cache` is the body's
 // own: its query is made to cover the box if it does not already.
 bool touchesNothing(const World& world, const Vec3& from, const Vec3& to, EllipsoidRadii radii,
-                    float skin, detail::BodyCache& cache, SweepScratch& sweep) {
+                    float skin, detail::BodyCache& cache, SweepScratch& sweep,
+                    detail::BoxMaskFunction boxMask) {
   const float margin = 0.25f * skin;
   const Bounds box = detail::pushBounds(from, to, radii, margin);
   // The body's own query, whenever it holds the box, however much larger
@@ -961,7 +962,7 @@ bool touchesNothing(const World& world, const Vec3& from, const Vec3& to, Ellips
     const detail::BlockBoxTest boxTest(box);
     for (const detail::CandidateBlock& block : blocks) {
       if (!boxTest.meets(block)) continue;
-      for (std::uint32_t lanes = detail::boxMask(block, box); lanes != 0; lanes &= lanes - 1) {
+      for (std::uint32_t lanes = boxMask(block, box); lanes != 0; lanes &= lanes - 1) {
         const int lane = std::countr_zero(lanes);
         // The exact sweep's lanes hold a padded extent: for them, the plane
         // and extent as the list's scan takes them.
@@ -990,7 +991,7 @@ bool touchesNothing(const World& world, const Vec3& from, const Vec3& to, Ellips
 void stopAtBody(const World& world, Body& body, const Vec3& at, const Vec3& normal,
                 StepScratch& scratch, StepReport* report, detail::BodyCache& cache) {
   if (touchesNothing(world, body.lastStepStart, at, body.radii, body.settings.skin, cache,
-                     scratch.sweep)) {
+                     scratch.sweep, detail::boxMaskFunction())) {
     body.position = at;
   } else {
     swapBodyCache(scratch, cache);
@@ -1018,6 +1019,9 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
                std::size_t last, StepScratch& scratch, std::span<StepReport> reports,
                std::span<BodyCache> caches) {
   if (grid.entries_.size() < 2 || first >= last) return;
+  // The clearance test's box mask, asked once a pass (the pushes' boxMask
+  // calls each tested the CPU).
+  const detail::BoxMaskFunction boxMask = detail::boxMaskFunction();
   // Most bodies of a small crowd have no other near them and were not
   // stopped by the sweep: the pass visits only the others, by their bits
   // (the full loop's head, with its spilled pointers, took 28 instructions
@@ -1162,7 +1166,7 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
     // 1,900 instructions (40 m/s, oa_dm5).
     const Vec3 end = body.position + push;
     if (touchesNothing(world, body.position, end, body.radii, body.settings.skin, caches[i],
-                       scratch.sweep))
+                       scratch.sweep, boxMask))
       body.position = end;
     else
       body.deferredPush = push;

@@ -205,6 +205,10 @@ namespace {
 // The widest paths with the masks' own signatures, so a scan calls the
 // chosen one directly, without planesMask's test of the CPU on every block.
 #ifdef BSPF_AVX_MASKS
+__attribute__((target("avx"))) std::uint32_t avxBoxMask(const CandidateBlock& block,
+                                                        const Bounds& box) {
+  return avxMask<Check::Box>(block, box, Vec3::Zero(), Vec3::Zero(), nullptr);
+}
 __attribute__((target("avx"))) std::uint32_t avxPlanesMask(const CandidateBlock& block,
                                                            const Bounds& box, const Vec3& start,
                                                            const Vec3& end, LaneSides& sides) {
@@ -218,6 +222,13 @@ __attribute__((target("avx"))) std::uint32_t avxExactMask(const CandidateBlock& 
 #endif
 
 }  // namespace
+
+BoxMaskFunction boxMaskFunction() {
+#ifdef BSPF_AVX_MASKS
+  if (widestPath() == MaskPath::Avx) return avxBoxMask;
+#endif
+  return boxMask;
+}
 
 PlanesMaskFunction planesMaskFunction() {
 #ifdef BSPF_AVX_MASKS

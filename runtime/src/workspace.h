@@ -333,13 +333,17 @@ std::uint32_t planesMask(const CandidateBlock& block, const Bounds& box, const V
 /// of the plane, and starts at most 1e-5 m behind it.
 std::uint32_t exactMask(const CandidateBlock& block, const Bounds& box, const Vec3& start,
                         const Vec3& end);
-/// planesMask and exactMask as the function they run on this CPU: a scan
-/// asks once and calls it for each of its blocks (one call a block, not two:
-/// the masks test the CPU, then call the widest path).
+/// boxMask, planesMask and exactMask as the function they run on this CPU:
+/// a scan asks once and calls it for each of its blocks (one call a block,
+/// not two: the masks test the CPU, then call the widest path; boxMask's
+/// test and switch were half of its 49 instructions a call in the pushes'
+/// clearance test).
+using BoxMaskFunction = std::uint32_t (*)(const CandidateBlock&, const Bounds&);
 using PlanesMaskFunction = std::uint32_t (*)(const CandidateBlock&, const Bounds&, const Vec3&,
                                              const Vec3&, LaneSides&);
 using ExactMaskFunction = std::uint32_t (*)(const CandidateBlock&, const Bounds&, const Vec3&,
                                             const Vec3&);
+BoxMaskFunction boxMaskFunction();
 PlanesMaskFunction planesMaskFunction();
 ExactMaskFunction exactMaskFunction();
 /// How the three masks above run: a lane at a time, 4 lanes per SSE

@@ -71,6 +71,9 @@ TEST_CASE("the SSE and AVX block masks give the same bits as the one-lane refere
       REQUIRE(bspf::detail::boxMask(block, box) == boxBits);
       REQUIRE(bspf::detail::planesMask(block, box, start, end, stepSides) == planesBits);
       REQUIRE(bspf::detail::exactMask(block, box, start, end) == exactBits);
+      REQUIRE(bspf::detail::boxMaskFunction()(block, box) == boxBits);
+      REQUIRE(bspf::detail::planesMaskFunction()(block, box, start, end, stepSides) == planesBits);
+      REQUIRE(bspf::detail::exactMaskFunction()(block, box, start, end) == exactBits);
     }
     INFO("round " << round);
     REQUIRE(boxBits == bspf::detail::scalarBoxMask(block, box));
