@@ -713,13 +713,22 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
     nearLinks_.push_back({other, nearHead_[self], distance, overlap});
     nearHead_[self] = std::uint32_t(nearLinks_.size() - 1);
   };
-  auto pair = [&](std::uint32_t a, std::uint32_t b) __attribute__((always_inline)) {
+  // Whether the boxes of entries a and b overlap; with no branch (the
+  // listed pairs are tested in a row, and which of them overlap is no
+  // pattern: a mispredicted branch a few pairs in ten).
+  auto boxesOverlapOf = [&](std::uint32_t a, std::uint32_t b) __attribute__((always_inline)) {
     const Entry &p = entries_[a], &q = entries_[b];
     const float ax = p.position.x() - q.position.x(), ay = p.position.y() - q.position.y(),
                 az = p.position.z() - q.position.z();
     const float reachXZ = p.radii.xz + q.radii.xz;
-    if (std::abs(ax) >= reachXZ || std::abs(az) >= reachXZ || std::abs(ay) >= p.radii.y + q.radii.y)
-      return;
+    return !((std::abs(ax) >= reachXZ) | (std::abs(az) >= reachXZ) |
+             (std::abs(ay) >= p.radii.y + q.radii.y));
+  };
+  // A pair whose boxes overlap: its distance and overlap, and its links.
+  auto linkOverlapping = [&](std::uint32_t a, std::uint32_t b) __attribute__((always_inline)) {
+    const Entry &p = entries_[a], &q = entries_[b];
+    const float ax = p.position.x() - q.position.x(), ay = p.position.y() - q.position.y(),
+                az = p.position.z() - q.position.z();
     const float distance = centreDistance(ax, ay, az);
     const float overlap = pairOverlap(ax, ay, az, distance, p.radii, q.radii);
     // The common case, tested before the cells themselves: the two lie less
@@ -735,6 +744,9 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
     if (examines(cellA, cellB)) link(a, b, distance, overlap);
     if (examines(cellB, cellA)) link(b, a, distance, overlap);
   };
+  auto pair = [&](std::uint32_t a, std::uint32_t b) __attribute__((always_inline)) {
+    if (boxesOverlapOf(a, b)) linkOverlapping(a, b);
+  };
 
   // No body moved more than the slack along any axis (along y, its own)
   // since the pairs were listed: every pair whose boxes overlap now is
@@ -749,7 +761,17 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   if (comparable &&
       detail::movedWithin<Entry>(entries_, listedEntries_, listedSlack_, listedSlackY_)) {
     ++listedBuilds_;
-    for (const std::uint64_t p : listedPairs_) pair(std::uint32_t(p >> 32), std::uint32_t(p));
+    // The pairs whose boxes overlap, gathered first (each written, the
+    // count moved on by the test), then linked.
+    overlappingPairs_.resize(listedPairs_.size());
+    std::uint64_t* const overlapping = overlappingPairs_.data();
+    std::size_t count = 0;
+    for (const std::uint64_t p : listedPairs_) {
+      overlapping[count] = p;
+      count += boxesOverlapOf(std::uint32_t(p >> 32), std::uint32_t(p));
+    }
+    for (std::size_t k = 0; k < count; ++k)
+      linkOverlapping(std::uint32_t(overlapping[k] >> 32), std::uint32_t(overlapping[k]));
     return true;
   }
   // A list that served no build (a body moved further than the slack in one
@@ -915,6 +937,78 @@ namespace {
 // not hold the push's box (plus twice the push's length, as a slide's).
 constexpr float kPushQueryPad = 0.3f;
 
+// Whether a triangle whose box overlaps the move's from `from` to `to` keeps
+// clear by more than `margin`, given its face plane and the body's extent
+// along it (detail::planesFaceTest): at both ends beyond the extent in front
+// of the plane, or behind it.
+bool keepsClear(const detail::FaceTest& face, const Vec3& from, const Vec3& to, float margin) {
+  const float fromSide = face.normal.dot(from) - face.distance,
+              toSide = face.normal.dot(to) - face.distance;
+  const float reach = face.reach + margin;
+  return !(std::min(fromSide, toSide) < reach && std::max(fromSide, toSide) > -reach);
+}
+
+// The candidates the body's level move made from its query, for its radii:
+// their boxes in blocks of 8 (a block whose box misses the move's `box` is
+// passed over whole) and, the planes method's, each face plane with the
+// body's extent along it (effectiveRadius, as planesFaceTest), so no
+// triangle's record is read from the level. The clearance test was 40 to
+// 50% of the pushes' cycles (walkers, 64 agents, oa_dm4 and oa_dm5);
+// scanning the blocks, not the list and the level's records, made the
+// pushes 10% faster on oa_dm5 at 6 and 40 m/s (oa_dm4's lists are short:
+// the same there). `world` and `triangles` are read only for the exact
+// sweep's lanes (`planesMade` false), which hold a padded extent: for them,
+// the plane and extent as the list's scan takes them.
+template <typename Blocks, typename Triangles>
+[[gnu::always_inline]] inline bool blocksKeepClear(const World& world, const Blocks& blocks,
+                                                   const Triangles& triangles, bool planesMade,
+                                                   const Bounds& box, const Vec3& from,
+                                                   const Vec3& to, EllipsoidRadii radii,
+                                                   float margin, detail::BoxMaskFunction boxMask) {
+  for (const detail::CandidateBlock& block : blocks) {
+    for (std::uint32_t lanes = boxMask(block, box); lanes != 0; lanes &= lanes - 1) {
+      const int lane = std::countr_zero(lanes);
+      const detail::FaceTest face =
+          planesMade ? detail::FaceTest{Vec3(block.normalX[lane], block.normalY[lane],
+                                             block.normalZ[lane]),
+                                        block.distance[lane], block.reach[lane]}
+                     : detail::planesFaceTest(world, triangles[block.slot[lane]], radii);
+      if (!keepsClear(face, from, to, margin)) return false;
+    }
+  }
+  return true;
+}
+
+// touchesNothing where the body's planes candidates do not decide it: its
+// query is made to cover `box` if it does not already (the body's own
+// query, whenever it holds the box, however much larger: cover() would
+// query again for a box far smaller than the query's; at 40 m/s, about 1
+// push in 15 did, and the body's next step then queried again for its own
+// move, 3 to 5% of a 40 m/s step's instructions). A new query is padded like
+// a walking body's own, so that it serves the body's next steps too. Only
+// the cost depends on the pad.
+[[gnu::noinline]] bool touchesNothingElsewhere(const World& world, const Vec3& from, const Vec3& to,
+                                               EllipsoidRadii radii, float margin,
+                                               const Bounds& box, detail::BodyCache& cache,
+                                               SweepScratch& sweep,
+                                               detail::BoxMaskFunction boxMask) {
+  NearbyTriangles& nearby = cache.nearby;
+  if (!nearby.holds(world, box.low, box.high))
+    nearby.cover(world, box.low, box.high, kPushQueryPad + 2 * (to - from).norm(), sweep);
+  if (cache.planes.madeFrom(nearby, radii))
+    return blocksKeepClear(world, cache.planes.blocks, cache.planes.triangles, true, box, from, to,
+                           radii, margin, boxMask);
+  if (cache.exact.madeFrom(nearby, radii))
+    return blocksKeepClear(world, cache.exact.blocks, cache.exact.triangles, false, box, from, to,
+                           radii, margin, boxMask);
+  for (const CandidateTriangle& c : nearby.list()) {
+    if (!boxesOverlap(c.low, c.high, box.low, box.high)) continue;
+    if (!keepsClear(detail::planesFaceTest(world, c.triangle, radii), from, to, margin))
+      return false;
+  }
+  return true;
+}
+
 // Whether a body with `radii` moving its centre from `from` to `to` keeps
 // clear of every triangle by more than a quarter of its skin: each triangle
 // whose box meets the box of the move is that far beyond the body's extent
@@ -923,64 +1017,20 @@ constexpr float kPushQueryPad = 0.3f;
 // planes method's pre-check and the exact sweep's both reject every such
 // triangle), and the body goes the whole way. The margin covers rounding:
 // a body resting on a floor is a whole skin above it. `cache` is the body's
-// own: its query is made to cover the box if it does not already.
-bool touchesNothing(const World& world, const Vec3& from, const Vec3& to, EllipsoidRadii radii,
-                    float skin, detail::BodyCache& cache, SweepScratch& sweep,
-                    detail::BoxMaskFunction boxMask) {
+// own: its query is made to cover the box if it does not already. Inline,
+// the common case (a walking body's planes candidates, made from a query
+// that holds the box) and the rest out of line: the call's entry and exit
+// alone were 25 instructions a push.
+[[gnu::always_inline]] inline bool touchesNothing(const World& world, const Vec3& from,
+                                                  const Vec3& to, EllipsoidRadii radii, float skin,
+                                                  detail::BodyCache& cache, SweepScratch& sweep,
+                                                  detail::BoxMaskFunction boxMask) {
   const float margin = 0.25f * skin;
   const Bounds box = detail::pushBounds(from, to, radii, margin);
-  // The body's own query, whenever it holds the box, however much larger
-  // (cover() would query again for a box far smaller than the query's: at
-  // 40 m/s, about 1 push in 15 did, and the body's next step then queried
-  // again for its own move; 3 to 5% of a 40 m/s step's instructions). A new
-  // query, when needed, is padded like a walking body's own, so that it
-  // serves the body's next steps too. Only the cost depends on the pad.
-  NearbyTriangles& nearby = cache.nearby;
-  if (!nearby.holds(world, box.low, box.high))
-    nearby.cover(world, box.low, box.high, kPushQueryPad + 2 * (to - from).norm(), sweep);
-  // Whether a triangle whose box overlaps the move's keeps clear, given its
-  // face plane and the body's extent along it (detail::planesFaceTest).
-  auto clear = [&](const detail::FaceTest& face) {
-    const float fromSide = face.normal.dot(from) - face.distance,
-                toSide = face.normal.dot(to) - face.distance;
-    const float reach = face.reach + margin;
-    return !(std::min(fromSide, toSide) < reach && std::max(fromSide, toSide) > -reach);
-  };
-  // The candidates the body's level move made from this query, when it
-  // made them for these radii: their boxes in blocks of 8 (a block whose
-  // box misses the move's is passed over whole) and, the planes method's,
-  // each face plane with the body's extent along it (effectiveRadius, as
-  // below), so no triangle's record is read from the level. The clearance
-  // test was 40 to 50% of the pushes' cycles (walkers, 64 agents, oa_dm4 and
-  // oa_dm5); scanning the blocks, not the list and the level's records, made
-  // the pushes 10% faster on oa_dm5 at 6 and 40 m/s (oa_dm4's lists are
-  // short: the same there).
-  const bool planesMade = cache.planes.madeFrom(nearby, radii);
-  if (planesMade || cache.exact.madeFrom(nearby, radii)) {
-    const auto& blocks = planesMade ? cache.planes.blocks : cache.exact.blocks;
-    const auto& triangles = planesMade ? cache.planes.triangles : cache.exact.triangles;
-    const detail::BlockBoxTest boxTest(box);
-    for (const detail::CandidateBlock& block : blocks) {
-      if (!boxTest.meets(block)) continue;
-      for (std::uint32_t lanes = boxMask(block, box); lanes != 0; lanes &= lanes - 1) {
-        const int lane = std::countr_zero(lanes);
-        // The exact sweep's lanes hold a padded extent: for them, the plane
-        // and extent as the list's scan takes them.
-        const detail::FaceTest face =
-            planesMade ? detail::FaceTest{Vec3(block.normalX[lane], block.normalY[lane],
-                                               block.normalZ[lane]),
-                                          block.distance[lane], block.reach[lane]}
-                       : detail::planesFaceTest(world, triangles[block.slot[lane]], radii);
-        if (!clear(face)) return false;
-      }
-    }
-    return true;
-  }
-  for (const CandidateTriangle& c : nearby.list()) {
-    if (!boxesOverlap(c.low, c.high, box.low, box.high)) continue;
-    if (!clear(detail::planesFaceTest(world, c.triangle, radii))) return false;
-  }
-  return true;
+  if (cache.planes.madeFrom(cache.nearby, radii) && cache.nearby.holds(world, box.low, box.high))
+    return blocksKeepClear(world, cache.planes.blocks, cache.planes.triangles, true, box, from, to,
+                           radii, margin, boxMask);
+  return touchesNothingElsewhere(world, from, to, radii, margin, box, cache, sweep, boxMask);
 }
 
 // A body the sweep stopped where it met another: set back to `at` along its

@@ -650,6 +650,8 @@ class BodyGrid {
   /// index), in cells of listedWidth_ by listedHeight_; listedSlack_ < 0
   /// when there is no list.
   std::vector<std::uint64_t> listedPairs_;
+  /// Those of listedPairs_ whose boxes overlap in this build.
+  std::vector<std::uint64_t> overlappingPairs_;
   std::vector<Entry> listedEntries_;
   float listedSlack_ = -1, listedSlackY_ = -1, listedWidth_ = 0, listedHeight_ = 0;
   int listedBuilds_ = 0;  ///< builds the list has served since it was made
