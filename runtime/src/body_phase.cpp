@@ -748,6 +748,20 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
     if (boxesOverlapOf(a, b)) linkOverlapping(a, b);
   };
 
+  // The listed pairs whose boxes overlap, gathered first (each written, the
+  // count moved on by the test), then linked.
+  auto linkListed = [&] {
+    overlappingPairs_.resize(listedPairs_.size());
+    std::uint64_t* const overlapping = overlappingPairs_.data();
+    std::size_t count = 0;
+    for (const std::uint64_t p : listedPairs_) {
+      overlapping[count] = p;
+      count += boxesOverlapOf(std::uint32_t(p >> 32), std::uint32_t(p));
+    }
+    for (std::size_t k = 0; k < count; ++k)
+      linkOverlapping(std::uint32_t(overlapping[k] >> 32), std::uint32_t(overlapping[k]));
+  };
+
   // No body moved more than the slack along any axis (along y, its own)
   // since the pairs were listed: every pair whose boxes overlap now is
   // listed (they were then within reach plus twice the slack), and no body
@@ -761,17 +775,7 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   if (comparable &&
       detail::movedWithin<Entry>(entries_, listedEntries_, listedSlack_, listedSlackY_)) {
     ++listedBuilds_;
-    // The pairs whose boxes overlap, gathered first (each written, the
-    // count moved on by the test), then linked.
-    overlappingPairs_.resize(listedPairs_.size());
-    std::uint64_t* const overlapping = overlappingPairs_.data();
-    std::size_t count = 0;
-    for (const std::uint64_t p : listedPairs_) {
-      overlapping[count] = p;
-      count += boxesOverlapOf(std::uint32_t(p >> 32), std::uint32_t(p));
-    }
-    for (std::size_t k = 0; k < count; ++k)
-      linkOverlapping(std::uint32_t(overlapping[k] >> 32), std::uint32_t(overlapping[k]));
+    linkListed();
     return true;
   }
   // A list that served no build (a body moved further than the slack in one
@@ -871,8 +875,10 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
                          (reachY + 2 * slackY) * grow,
                          [&](const detail::SortedCentre* self, const detail::SortedCentre* other) {
                            listedPairs_.push_back(std::uint64_t(self->body) << 32 | other->body);
-                           pairOfCentres(self, other);
                          });
+  // Then linked as a build the list serves links them (each pair tested in
+  // the scan took a mispredicted branch for most of them).
+  linkListed();
   listedEntries_ = entries_;
   listedSlack_ = slack;
   listedSlackY_ = slackY;
