@@ -725,12 +725,23 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
              (std::abs(ay) >= p.radii.y + q.radii.y));
   };
   // A pair whose boxes overlap: its distance and overlap, and its links.
-  auto linkOverlapping = [&](std::uint32_t a, std::uint32_t b) __attribute__((always_inline)) {
+  // The distance and overlap of the pair of entries a and b, as a push
+  // measures them.
+  auto measure = [&](std::uint32_t a, std::uint32_t b, float& distance, float& overlap)
+      __attribute__((always_inline)) {
     const Entry &p = entries_[a], &q = entries_[b];
     const float ax = p.position.x() - q.position.x(), ay = p.position.y() - q.position.y(),
                 az = p.position.z() - q.position.z();
-    const float distance = centreDistance(ax, ay, az);
-    const float overlap = pairOverlap(ax, ay, az, distance, p.radii, q.radii);
+    distance = centreDistance(ax, ay, az);
+    overlap = pairOverlap(ax, ay, az, distance, p.radii, q.radii);
+  };
+  // A pair that overlaps (overlap > 0): its links. A pair whose boxes
+  // overlap but whose bodies do not pushes neither, and gets none: a push
+  // offers only pushers that overlap, so every link is one, and a body
+  // visited has one.
+  auto linkOverlapping = [&](std::uint32_t a, std::uint32_t b, float distance, float overlap)
+      __attribute__((always_inline)) {
+    const Entry &p = entries_[a], &q = entries_[b];
     // The common case, tested before the cells themselves: the two lie less
     // than half a cell apart along each axis in the coordinates cells are
     // cut from (whichever half of its cell a body lies in, the neighbour on
@@ -745,21 +756,36 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
     if (examines(cellB, cellA)) link(b, a, distance, overlap);
   };
   auto pair = [&](std::uint32_t a, std::uint32_t b) __attribute__((always_inline)) {
-    if (boxesOverlapOf(a, b)) linkOverlapping(a, b);
+    if (!boxesOverlapOf(a, b)) return;
+    float distance, overlap;
+    measure(a, b, distance, overlap);
+    if (overlap > 0) linkOverlapping(a, b, distance, overlap);
   };
 
-  // The listed pairs whose boxes overlap, gathered first (each written, the
-  // count moved on by the test), then linked.
+  // The listed pairs whose boxes overlap, gathered first, then of those the
+  // ones that overlap, then linked: each gathering with no branch (each
+  // pair written, the count moved on by the test), as which pairs pass is
+  // no pattern (a mispredicted branch a few pairs in ten).
   auto linkListed = [&] {
     overlappingPairs_.resize(listedPairs_.size());
-    std::uint64_t* const overlapping = overlappingPairs_.data();
-    std::size_t count = 0;
+    OverlappingPair* const overlapping = overlappingPairs_.data();
+    std::size_t boxes = 0;
     for (const std::uint64_t p : listedPairs_) {
-      overlapping[count] = p;
-      count += boxesOverlapOf(std::uint32_t(p >> 32), std::uint32_t(p));
+      overlapping[boxes].pair = p;
+      boxes += boxesOverlapOf(std::uint32_t(p >> 32), std::uint32_t(p));
     }
-    for (std::size_t k = 0; k < count; ++k)
-      linkOverlapping(std::uint32_t(overlapping[k] >> 32), std::uint32_t(overlapping[k]));
+    std::size_t count = 0;
+    for (std::size_t k = 0; k < boxes; ++k) {
+      const std::uint64_t p = overlapping[k].pair;
+      float distance, overlap;
+      measure(std::uint32_t(p >> 32), std::uint32_t(p), distance, overlap);
+      overlapping[count] = {p, distance, overlap};
+      count += overlap > 0;
+    }
+    for (std::size_t k = 0; k < count; ++k) {
+      const OverlappingPair& o = overlapping[k];
+      linkOverlapping(std::uint32_t(o.pair >> 32), std::uint32_t(o.pair), o.distance, o.overlap);
+    }
   };
 
   // No body moved more than the slack along any axis (along y, its own)
@@ -1140,11 +1166,11 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
         const bool known = apartKnown(near.distance);
         if (!nearest.wants(known ? near.distance : 0, near.body)) continue;
         const Vec3& other = grid.entries_[near.body].position;
-        if (near.overlap > 0)
-          nearest.offer({near.body, known,
-                         Vec3(self.position.x() - other.x(), self.position.y() - other.y(),
-                              self.position.z() - other.z()),
-                         near.overlap});
+        assert(near.overlap > 0);
+        nearest.offer({near.body, known,
+                       Vec3(self.position.x() - other.x(), self.position.y() - other.y(),
+                            self.position.z() - other.z()),
+                       near.overlap});
       }
     } else {
       // Its own cell first, outwards from its own place (a cell's bodies sit

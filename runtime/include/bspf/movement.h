@@ -631,10 +631,11 @@ class BodyGrid {
   /// detail::kCentreRun at x +infinity; kept from the last build, whose
   /// order is nearly this build's.
   std::vector<detail::SortedCentre> xOrder_;
-  /// The bodies the grid would examine for a body and whose boxes overlap
-  /// its own: a list a body, in nearLinks_ from nearHead_[body] on (the
-  /// order does not matter: NearestPushers keeps the nearest whatever the
-  /// order, and with no more candidates than the cap the grid examines all).
+  /// The bodies the grid would examine for a body and that overlap it
+  /// (pairOverlap > 0): a list a body, in nearLinks_ from nearHead_[body] on
+  /// (the order does not matter: NearestPushers keeps the nearest whatever
+  /// the order, and with no more candidates than the cap the grid examines
+  /// all).
   struct NearLink {
     std::uint32_t body;
     std::uint32_t next;  ///< in nearLinks_; kNoNeighbour ends the list
@@ -650,8 +651,12 @@ class BodyGrid {
   /// index), in cells of listedWidth_ by listedHeight_; listedSlack_ < 0
   /// when there is no list.
   std::vector<std::uint64_t> listedPairs_;
-  /// Those of listedPairs_ whose boxes overlap in this build.
-  std::vector<std::uint64_t> overlappingPairs_;
+  /// Those of listedPairs_ that overlap in this build, and how far.
+  struct OverlappingPair {
+    std::uint64_t pair;
+    float distance, overlap;  ///< as NearLink's
+  };
+  std::vector<OverlappingPair> overlappingPairs_;
   std::vector<Entry> listedEntries_;
   float listedSlack_ = -1, listedSlackY_ = -1, listedWidth_ = 0, listedHeight_ = 0;
   int listedBuilds_ = 0;  ///< builds the list has served since it was made
