@@ -1118,6 +1118,30 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
     visit &= ~((std::uint64_t(1) << first) - 1);
     if (last < 64) visit &= (std::uint64_t(1) << last) - 1;
   }
+  // The pushes found, then made (or carried) a pass later: each body's
+  // clearance test waits on its push's long chain of square roots and
+  // divisions, and apart from it the tests of bodies in a row overlap. A
+  // push changes only its own body's position and its own cache, which
+  // nothing else in the pass reads.
+  struct PendingPush {
+    std::uint32_t body;
+    Vec3 push;
+  };
+  std::array<PendingPush, 64> pending;
+  std::size_t pendingCount = 0;
+  auto makePending = [&] {
+    for (std::size_t k = 0; k < pendingCount; ++k) {
+      Body& body = bodies[pending[k].body];
+      const Vec3& push = pending[k].push;
+      const Vec3 end = body.position + push;
+      if (touchesNothing(world, body.position, end, body.radii, body.settings.skin,
+                         caches[pending[k].body], scratch.sweep, boxMask))
+        body.position = end;
+      else
+        body.deferredPush = push;
+    }
+    pendingCount = 0;
+  };
   for (std::size_t i = first; i < last; ++i) {
     if (grid.sortedNeighbours_) {
       if (visit == 0) break;
@@ -1246,14 +1270,11 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
     // whose slide it joins (Body::deferredPush): nearly all of them press
     // the body into a wall it walks along, and a slide of their own cost
     // 1,900 instructions (40 m/s, oa_dm5).
-    const Vec3 end = body.position + push;
-    if (touchesNothing(world, body.position, end, body.radii, body.settings.skin, caches[i],
-                       scratch.sweep, boxMask))
-      body.position = end;
-    else
-      body.deferredPush = push;
     if (!reports.empty()) reports[i].bodyContacts += nearest.size();
+    pending[pendingCount++] = {std::uint32_t(i), push};
+    if (pendingCount == pending.size()) makePending();
   }
+  makePending();
 }
 
 }  // namespace detail
