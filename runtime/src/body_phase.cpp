@@ -981,16 +981,18 @@ bool keepsClear(const detail::FaceTest& face, const Vec3& from, const Vec3& to, 
 }
 
 // The candidates the body's level move made from its query, for its radii:
-// their boxes in blocks of 8 (a block whose box misses the move's `box` is
-// passed over whole) and, the planes method's, each face plane with the
-// body's extent along it (effectiveRadius, as planesFaceTest), so no
-// triangle's record is read from the level. The clearance test was 40 to
-// 50% of the pushes' cycles (walkers, 64 agents, oa_dm4 and oa_dm5);
-// scanning the blocks, not the list and the level's records, made the
-// pushes 10% faster on oa_dm5 at 6 and 40 m/s (oa_dm4's lists are short:
-// the same there). `world` and `triangles` are read only for the exact
-// sweep's lanes (`planesMade` false), which hold a padded extent: for them,
-// the plane and extent as the list's scan takes them.
+// their boxes in blocks of 8, each block's lanes that overlap the move's
+// `box` found by the lane mask (no test of the block's own box first: its
+// branch mispredicted for a third of the blocks, and the mask finds no lane
+// where that test would have passed the block over) and, the planes
+// method's, each face plane with the body's extent along it
+// (effectiveRadius, as planesFaceTest), so no triangle's record is read
+// from the level. The clearance test was 40 to 50% of the pushes' cycles
+// (walkers, 64 agents, oa_dm4 and oa_dm5); scanning the blocks, not the
+// list and the level's records, made the pushes 10% faster on oa_dm5 at 6
+// and 40 m/s. `world` and `triangles` are read only for the exact sweep's
+// lanes (`planesMade` false), which hold a padded extent: for them, the
+// plane and extent as the list's scan takes them.
 template <typename Blocks, typename Triangles>
 [[gnu::always_inline]] inline bool blocksKeepClear(const World& world, const Blocks& blocks,
                                                    const Triangles& triangles, bool planesMade,
