@@ -721,8 +721,8 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
     const float ax = p.position.x() - q.position.x(), ay = p.position.y() - q.position.y(),
                 az = p.position.z() - q.position.z();
     const float reachXZ = p.radii.xz + q.radii.xz;
-    return !((std::abs(ax) >= reachXZ) | (std::abs(az) >= reachXZ) |
-             (std::abs(ay) >= p.radii.y + q.radii.y));
+    return !(int(std::abs(ax) >= reachXZ) | int(std::abs(az) >= reachXZ) |
+             int(std::abs(ay) >= p.radii.y + q.radii.y));
   };
   // A pair whose boxes overlap: its distance and overlap, and its links.
   // The distance and overlap of the pair of entries a and b, as a push
