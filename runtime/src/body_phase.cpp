@@ -724,7 +724,6 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
     return !(int(std::abs(ax) >= reachXZ) | int(std::abs(az) >= reachXZ) |
              int(std::abs(ay) >= p.radii.y + q.radii.y));
   };
-  // A pair whose boxes overlap: its distance and overlap, and its links.
   // The distance and overlap of the pair of entries a and b, as a push
   // measures them.
   auto measure = [&](std::uint32_t a, std::uint32_t b, float& distance, float& overlap)
