@@ -53,25 +53,9 @@ struct Pusher {
   float overlap;
 };
 
-// The distance between two bodies' centres `apart` (one's minus the
-// other's) apart, as a push measures it, and whether it gives a direction.
-float centreDistance(float ax, float ay, float az) {
-  return std::sqrt(ax * ax + (ay * ay + az * az));  // as Eigen does
-}
-bool apartKnown(float distance) { return distance > 1e-6f; }
-
-// How far two bodies with `selfRadii` and `otherRadii` overlap along the
-// line between their centres, `apart` (ax, ay, az) and `distance` apart
-// (centreDistance). The same value for the pair either way round: the
-// direction's components change sign only, effectiveRadius squares them,
-// and the two extents' sum commutes.
-float pairOverlap(float ax, float ay, float az, float distance, EllipsoidRadii selfRadii,
-                  EllipsoidRadii otherRadii) {
-  // At one point they part horizontally (tieBreakDirection).
-  if (!apartKnown(distance)) return selfRadii.xz + otherRadii.xz;
-  const Vec3 direction(ax / distance, ay / distance, az / distance);
-  return effectiveRadius(direction, selfRadii) + effectiveRadius(direction, otherRadii) - distance;
-}
+using detail::apartKnown;
+using detail::centreDistance;
+using detail::pairOverlap;
 
 // Keeps the kMaxBodyPushes nearest pushers, nearest first (ties: lower
 // index). A pile offers up to kMaxBodyCandidates of them per body, so the
@@ -762,9 +746,10 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   };
 
   // The listed pairs whose boxes overlap, gathered first, then of those the
-  // ones that overlap, then linked: each gathering with no branch (each
-  // pair written, the count moved on by the test), as which pairs pass is
-  // no pattern (a mispredicted branch a few pairs in ten).
+  // ones that overlap (measured four at a time: detail::keepOverlapping),
+  // then linked: each gathering with no branch (each pair written, the
+  // count moved on by the test), as which pairs pass is no pattern (a
+  // mispredicted branch a few pairs in ten).
   auto linkListed = [&] {
     overlappingPairs_.resize(listedPairs_.size());
     OverlappingPair* const overlapping = overlappingPairs_.data();
@@ -773,14 +758,7 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
       overlapping[boxes].pair = p;
       boxes += boxesOverlapOf(std::uint32_t(p >> 32), std::uint32_t(p));
     }
-    std::size_t count = 0;
-    for (std::size_t k = 0; k < boxes; ++k) {
-      const std::uint64_t p = overlapping[k].pair;
-      float distance, overlap;
-      measure(std::uint32_t(p >> 32), std::uint32_t(p), distance, overlap);
-      overlapping[count] = {p, distance, overlap};
-      count += overlap > 0;
-    }
+    const std::size_t count = detail::keepOverlapping(entries_.data(), overlapping, boxes);
     for (std::size_t k = 0; k < count; ++k) {
       const OverlappingPair& o = overlapping[k];
       linkOverlapping(std::uint32_t(o.pair >> 32), std::uint32_t(o.pair), o.distance, o.overlap);

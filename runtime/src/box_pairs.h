@@ -4,7 +4,8 @@
 // tested against those after it that start before it ends along x), and
 // the neighbour search's (BodyGrid::findNeighboursBySorting: centres sorted
 // by x, each against those after it within reach), with the test of whether
-// the bodies stayed near enough where that search last listed its pairs;
+// the bodies stayed near enough where that search last listed its pairs
+// and the measure of the pairs it finds (how far apart, how much overlap);
 // and the pass over a crowd that opens each build (its cell size, whether
 // any body moved fast). Private to the runtime.
 #pragma once
@@ -166,6 +167,112 @@ bool movedWithin(std::span<const Record> now, std::span<const Record> then, floa
   return _mm_movemask_ps(nan) == 0 && _mm_movemask_ps(within) == 15;
 #else
   return movedWithinOneByOne(now, then, slack, slackY);
+#endif
+}
+
+// The distance between two bodies' centres `apart` (one's minus the
+// other's) apart, as a push measures it, and whether it gives a direction.
+inline float centreDistance(float ax, float ay, float az) {
+  return std::sqrt(ax * ax + (ay * ay + az * az));  // as Eigen does
+}
+inline bool apartKnown(float distance) { return distance > 1e-6f; }
+
+// How far two bodies with `selfRadii` and `otherRadii` overlap along the
+// line between their centres, `apart` (ax, ay, az) and `distance` apart
+// (centreDistance). The same value for the pair either way round: the
+// direction's components change sign only, effectiveRadius squares them,
+// and the two extents' sum commutes.
+inline float pairOverlap(float ax, float ay, float az, float distance, EllipsoidRadii selfRadii,
+                         EllipsoidRadii otherRadii) {
+  // At one point they part horizontally (tieBreakDirection).
+  if (!apartKnown(distance)) return selfRadii.xz + otherRadii.xz;
+  const Vec3 direction(ax / distance, ay / distance, az / distance);
+  return effectiveRadius(direction, selfRadii) + effectiveRadius(direction, otherRadii) - distance;
+}
+
+/// Of the first `count` of `pairs` (each one's `pair` is a << 32 | b,
+/// indices into `records`), keeps those whose bodies overlap (pairOverlap
+/// > 0), in their order, at the front of `pairs`, each with the `distance`
+/// (centreDistance) and `overlap` (pairOverlap) of its centres, the first's
+/// minus the second's; returns how many it kept. The reference, one pair
+/// at a time.
+template <typename Record, typename Pair>
+std::size_t keepOverlappingOneByOne(const Record* records, Pair* pairs, std::size_t count) {
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::uint64_t pair = pairs[k].pair;
+    const Record &p = records[pair >> 32], &q = records[std::uint32_t(pair)];
+    const float ax = p.position.x() - q.position.x(), ay = p.position.y() - q.position.y(),
+                az = p.position.z() - q.position.z();
+    const float distance = centreDistance(ax, ay, az);
+    const float overlap = pairOverlap(ax, ay, az, distance, p.radii, q.radii);
+    pairs[kept] = {pair, distance, overlap};
+    kept += overlap > 0;
+  }
+  return kept;
+}
+
+/// keepOverlappingOneByOne's answer, the same floats. With SSE2, four pairs
+/// at a time: each pair's three square roots and three divisions are
+/// four-lane ones, in the reference's order of operations (SSE rounds each
+/// as the scalar one does). One pair at a time they were most of the
+/// listed neighbour search's time (walkers, 64 agents, oa_dm4: 11 pairs a
+/// build whose boxes overlap, 66 roots and divisions).
+template <typename Record, typename Pair>
+std::size_t keepOverlapping(const Record* records, Pair* pairs, std::size_t count) {
+#ifdef BSPF_SSE_MASKS
+  static_assert(offsetof(Record, position) == 0 && offsetof(Record, radii) == 12 &&
+                sizeof(Record) >= 20);
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < count; k += 4) {
+    // The group's pairs (past the end, the first again), read before any
+    // is overwritten: the kept ones go to places at or before their own.
+    const std::size_t lanes = std::min<std::size_t>(4, count - k);
+    std::uint64_t group[4];
+    for (std::size_t j = 0; j < 4; ++j) group[j] = pairs[k + (j < lanes ? j : 0)].pair;
+    auto record = [&](std::size_t j, bool second) -> const Record& {
+      return records[second ? std::uint32_t(group[j]) : std::uint32_t(group[j] >> 32)];
+    };
+    // Each side's x, y, z and xz radius, transposed, and its y radius.
+    auto side = [&](bool second, __m128& x, __m128& y, __m128& z, __m128& xz, __m128& radiusY) {
+      x = _mm_loadu_ps(&record(0, second).position.x());
+      y = _mm_loadu_ps(&record(1, second).position.x());
+      z = _mm_loadu_ps(&record(2, second).position.x());
+      xz = _mm_loadu_ps(&record(3, second).position.x());
+      _MM_TRANSPOSE4_PS(x, y, z, xz);
+      radiusY = _mm_setr_ps(record(0, second).radii.y, record(1, second).radii.y,
+                            record(2, second).radii.y, record(3, second).radii.y);
+    };
+    __m128 px, py, pz, pXZ, pY, qx, qy, qz, qXZ, qY;
+    side(false, px, py, pz, pXZ, pY);
+    side(true, qx, qy, qz, qXZ, qY);
+    const __m128 ax = _mm_sub_ps(px, qx), ay = _mm_sub_ps(py, qy), az = _mm_sub_ps(pz, qz);
+    const __m128 distance = _mm_sqrt_ps(
+        _mm_add_ps(_mm_mul_ps(ax, ax), _mm_add_ps(_mm_mul_ps(ay, ay), _mm_mul_ps(az, az))));
+    const __m128 dx = _mm_div_ps(ax, distance), dy = _mm_div_ps(ay, distance),
+                 dz = _mm_div_ps(az, distance);
+    auto effective = [&](__m128 radiusXZ, __m128 radiusY) {
+      const __m128 x = _mm_mul_ps(radiusXZ, dx), y = _mm_mul_ps(radiusY, dy),
+                   z = _mm_mul_ps(radiusXZ, dz);
+      return _mm_sqrt_ps(
+          _mm_add_ps(_mm_add_ps(_mm_mul_ps(x, x), _mm_mul_ps(y, y)), _mm_mul_ps(z, z)));
+    };
+    const __m128 apart = _mm_sub_ps(_mm_add_ps(effective(pXZ, pY), effective(qXZ, qY)), distance);
+    // Centres not apart (apartKnown false, NaN too): the xz radii's sum.
+    const __m128 known = _mm_cmpgt_ps(distance, _mm_set1_ps(1e-6f));
+    const __m128 overlap =
+        _mm_or_ps(_mm_and_ps(known, apart), _mm_andnot_ps(known, _mm_add_ps(pXZ, qXZ)));
+    alignas(16) float distances[4], overlaps[4];
+    _mm_store_ps(distances, distance);
+    _mm_store_ps(overlaps, overlap);
+    for (std::size_t j = 0; j < lanes; ++j) {
+      pairs[kept] = {group[j], distances[j], overlaps[j]};
+      kept += overlaps[j] > 0;
+    }
+  }
+  return kept;
+#else
+  return keepOverlappingOneByOne(records, pairs, count);
 #endif
 }
 

@@ -380,3 +380,101 @@ TEST_CASE(
   body.position = body.lastStepStart + bspf::Vec3(0, 0, 0.5f * 0.45f);
   CHECK_FALSE(bspf::detail::movedSurelySlow(body));
 }
+
+namespace {
+
+// What the neighbour search keeps of a listed pair (BodyGrid's
+// OverlappingPair).
+struct MeasuredPair {
+  std::uint64_t pair;
+  float distance, overlap;
+};
+
+}  // namespace
+
+TEST_CASE(
+    "the four-lane pair measure keeps the pairs the one-by-one measure keeps, with the same "
+    "distances and overlaps to the bit",
+    "[runtime][bodies]") {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> place(-3, 3), near(-1.2f, 1.2f), radius(0.2f, 0.9f);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  int kept = 0, dropped = 0, atOnePoint = 0, oneAboveOther = 0;
+  for (int round = 0; round < 3000; ++round) {
+    const std::size_t bodies = 2 + rng() % 40;
+    std::vector<Record> records(bodies);
+    for (std::size_t i = 0; i < bodies; ++i)
+      records[i] = {bspf::Vec3(place(rng), place(rng), place(rng)),
+                    {radius(rng), radius(rng)},
+                    std::uint32_t(i)};
+    // Every length to 13 (whole groups of four and every remainder), the
+    // second body most often near the first; some at the same point, right
+    // above it, or not finite.
+    const std::size_t count = rng() % 14;
+    std::vector<MeasuredPair> lanes(count), reference(count);
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::uint32_t a = std::uint32_t(rng() % bodies),
+                          b = std::uint32_t((a + 1 + rng() % (bodies - 1)) % bodies);
+      Record& q = records[b];
+      q.position = records[a].position + bspf::Vec3(near(rng), near(rng), near(rng));
+      switch (rng() % 24) {
+        case 0: q.position = records[a].position; break;
+        case 1:
+          q.position.x() = records[a].position.x(), q.position.z() = records[a].position.z();
+          break;
+        case 2: q.position.y() = nan; break;
+        case 3: q.position.x() = kInfinity; break;
+        case 4: q.radii.y = nan; break;
+        default: break;
+      }
+      lanes[k] = reference[k] = {std::uint64_t(a) << 32 | b, -1, -1};
+    }
+    // A pair's bodies are measured where the last pair left them.
+    for (std::size_t k = 0; k < count; ++k) {
+      const Record &p = records[reference[k].pair >> 32],
+                   &q = records[std::uint32_t(reference[k].pair)];
+      atOnePoint += p.position == q.position;
+      oneAboveOther += p.position.x() == q.position.x() && p.position.z() == q.position.z();
+    }
+    const std::size_t expected =
+        bspf::detail::keepOverlappingOneByOne(records.data(), reference.data(), count);
+    INFO("round " << round << ", pairs " << count);
+    REQUIRE(bspf::detail::keepOverlapping(records.data(), lanes.data(), count) == expected);
+    for (std::size_t k = 0; k < expected; ++k) {
+      REQUIRE(lanes[k].pair == reference[k].pair);
+      REQUIRE(std::bit_cast<std::uint32_t>(lanes[k].distance) ==
+              std::bit_cast<std::uint32_t>(reference[k].distance));
+      REQUIRE(std::bit_cast<std::uint32_t>(lanes[k].overlap) ==
+              std::bit_cast<std::uint32_t>(reference[k].overlap));
+    }
+    kept += int(expected);
+    dropped += int(count - expected);
+  }
+  // Both, on bodies of xz radius 0.5 whose centres are 0.8 apart along x
+  // (they overlap by 0.2), 1.6 apart along z (not at all), exactly 1 apart
+  // (touching: no overlap), and at one point, with xz radii 0.5 and 0.25
+  // (by their sum).
+  const std::vector<Record> five{{bspf::Vec3(0, 0, 0), {0.5f, 1}, 0},
+                                 {bspf::Vec3(0.8f, 0, 0), {0.5f, 1}, 1},
+                                 {bspf::Vec3(0, 0, 1.6f), {0.5f, 1}, 2},
+                                 {bspf::Vec3(1, 0, 0), {0.5f, 1}, 3},
+                                 {bspf::Vec3(0, 0, 0), {0.25f, 1}, 4}};
+  for (const bool lanesToo : {false, true}) {
+    std::vector<MeasuredPair> measured{{1, 0, 0}, {2, 0, 0}, {3, 0, 0}, {4, 0, 0}};
+    INFO((lanesToo ? "four lanes" : "one by one"));
+    REQUIRE((lanesToo
+                 ? bspf::detail::keepOverlapping(five.data(), measured.data(), 4)
+                 : bspf::detail::keepOverlappingOneByOne(five.data(), measured.data(), 4)) == 2);
+    CHECK(measured[0].pair == 1);
+    CHECK(measured[0].distance == Approx(0.8f));
+    CHECK(measured[0].overlap == Approx(0.2f));
+    CHECK(measured[1].pair == 4);
+    CHECK(measured[1].distance == 0);
+    CHECK(measured[1].overlap == 0.75f);
+  }
+  // Both answers came up often, and the corner cases were there.
+  CHECK(kept > 3000);
+  CHECK(dropped > 3000);
+  CHECK(atOnePoint > 100);
+  CHECK(oneAboveOther > 200);
+}
