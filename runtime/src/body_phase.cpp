@@ -841,13 +841,14 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   // along x (in the clamped coordinates cells are cut from), so 34 bodies
   // (it and 33 others) would lie within 2 cells of each other along x,
   // consecutive in x order; none lie within 4. That leaves room for a
-  // list's moves: while no body moves more than the slack along x (a
-  // quarter of a cell; clamping shortens no distance more than the move),
-  // no 34 come within 3.5 (the slack along y counts for nothing here).
+  // list's moves: while no body moves more than the slack along x (at most
+  // half a cell; clamping shortens no distance more than the move), two
+  // come no more than a cell nearer, and no 34 within 3 (the slack along y
+  // counts for nothing here).
   // (Testing only the runs that start at every 4th or 8th place, shorter to
   // hold any such run, turned fan's crowd back to the grid: it has runs of
   // 31 within 4 cells.)
-  static_assert(kListSlackShare <= 0.5f, "a list's moves keep no 34 bodies within 2 cells");
+  static_assert(kListSlackShare <= 1, "a list's moves keep no 34 bodies within 2 cells");
   constexpr std::uint32_t kRun = kMaxBodyCandidates + 2;
   for (std::uint32_t k = 0; k + kRun <= n; ++k)
     if (!(clampToCells(xOrder_[k + kRun - 1].x * inverseWidth_) -

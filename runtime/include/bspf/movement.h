@@ -666,22 +666,24 @@ class BodyGrid {
   int buildsUntilListingAgain_ = 0;
   static constexpr int kLeastBuildsBeforeListingAgain = 16, kMostBuildsBeforeListingAgain = 256;
   int listingBackOff_ = kLeastBuildsBeforeListingAgain;
-  /// A list's slack, as a share of the reach (half a cell: the slack is the
-  /// widest body's xz radius). Larger, a list lasts longer but holds more
-  /// pairs, and the scan that lists them reads further along x: 0.25, 0.5
-  /// and 1 cost 135, 113 and 113 instructions a body-step (walkers, 64
-  /// agents, 6 m/s, oa_dm4; 142 without a list).
-  static constexpr float kListSlackShare = 0.5f;
+  /// A list's slack, as a share of the reach (half a cell, twice the
+  /// widest body's xz radius): at most 1 (the cell-count bound,
+  /// findNeighboursBySorting). Larger, a list lasts longer but holds more
+  /// pairs, and the scan that lists them reads further along x. Once the
+  /// listed pairs were measured four at a time, the whole reach (1, and 1
+  /// along y) made the body phase's median frame 2.2% faster than 0.5 (and
+  /// 0.75 along y) on oa_dm4, 1.4 to 5% on the other shared levels (walkers,
+  /// 64 agents, 6 m/s; 0.75 and 1 along x with 0.75 along y: 0.5% and 0.7%).
+  /// Before that, 0.25, 0.5 and 1 cost 135, 113 and 113 instructions a
+  /// body-step (oa_dm4; 142 without a list).
+  static constexpr float kListSlackShare = 1;
   /// The slack along y, as a share of the reach along y (half a cell's
   /// height). Its own, because falling bodies move along y: on fan, 255 of
   /// the 262 lists that ended in 600 frames ended on a move along y alone
-  /// (walkers, 64 agents, 6 m/s). Free of the cell-count bound, which
-  /// counts along x. 0.5, 0.75 and 1 cost 150, 143 and 142 instructions a
-  /// body-step in BodyGrid::build on fan (168 with the x slack along y),
-  /// 131.7, 128.5 and 128.5 on oacmpdm5 (149.9); the lists hold more pairs
-  /// one above the other: cad_building, whose floors lie 3 m apart, 123
-  /// with each (111).
-  static constexpr float kListSlackShareY = 0.75f;
+  /// (walkers, 64 agents, 6 m/s, a share of 0.75). Free of the cell-count
+  /// bound, which counts along x. The lists hold more pairs one above the
+  /// other: on fan 1.5 was 1.7% faster than 1, on oa_dm4 1.4% slower.
+  static constexpr float kListSlackShareY = 1;
 };
 
 /// Per-thread scratch for the step. Reusable across worlds and frames; it
