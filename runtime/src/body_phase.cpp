@@ -1138,24 +1138,32 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
     if (grid.sortedNeighbours_ && grid.nearHead_[i] == BodyGrid::kNoNeighbour) continue;
     NearestPushers nearest;
     int examined = 0;
-    auto examine = [&](const BodyGrid::Entry& other) {
+    // The unsorted grid's candidates whose boxes overlap this body's, as
+    // (this body's entry, the other's) pairs, measured after the gathering
+    // four at a time (detail::keepOverlapping): a pile gathers
+    // kMaxBodyCandidates a body, and each one's three square roots and
+    // three divisions, one at a time, were most of its body phase.
+    struct CandidatePair {
+      std::uint64_t pair;
+      float distance, overlap;
+    };
+    std::array<CandidatePair, kMaxBodyCandidates> candidates;
+    std::size_t boxesOverlapping = 0;
+    auto examine = [&](std::uint32_t selfEntry, std::uint32_t otherEntry) {
       ++examined;
-      // From the other towards this body, in scalars: a pile examines
-      // kMaxBodyCandidates a body, and Eigen's expressions cost twice this.
-      const float ax = self.position.x() - other.position.x(),
-                  ay = self.position.y() - other.position.y(),
-                  az = self.position.z() - other.position.z();
+      const BodyGrid::Entry& other = grid.entries_[otherEntry];
       // Overlapping ellipsoids overlap in their bounding boxes too: most
       // candidates of a walking crowd end here, before any square root.
+      // With no branch (the pair written, the count moved on by the test):
+      // in a pile, which candidates pass is no pattern. A NaN passes, to be
+      // measured, as it did with the early return.
       const float reachXZ = self.radii.xz + other.radii.xz;
-      if (std::abs(ax) >= reachXZ || std::abs(az) >= reachXZ ||
-          std::abs(ay) >= self.radii.y + other.radii.y)
-        return;
-      const float distance = centreDistance(ax, ay, az);
-      const bool known = apartKnown(distance);
-      if (!nearest.wants(known ? distance : 0, other.body)) return;
-      const float overlap = pairOverlap(ax, ay, az, distance, self.radii, other.radii);
-      if (overlap > 0) nearest.offer({other.body, known, Vec3(ax, ay, az), overlap});
+      const bool boxes =
+          int(!(std::abs(self.position.x() - other.position.x()) >= reachXZ)) &
+          int(!(std::abs(self.position.z() - other.position.z()) >= reachXZ)) &
+          int(!(std::abs(self.position.y() - other.position.y()) >= self.radii.y + other.radii.y));
+      candidates[boxesOverlapping].pair = std::uint64_t(selfEntry) << 32 | otherEntry;
+      boxesOverlapping += boxes;
     };
 
     if (grid.sortedNeighbours_) {
@@ -1163,7 +1171,7 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
       // than kMaxBodyCandidates, so examined in any order they give the
       // same nearest pushers.
       // Each pair's distance and overlap were measured once, for both
-      // bodies, as examine() measures them.
+      // bodies, as the unsorted path measures them (detail::keepOverlapping).
       for (std::uint32_t link = grid.nearHead_[i]; link != BodyGrid::kNoNeighbour;
            link = grid.nearLinks_[link].next) {
         const BodyGrid::NearLink& near = grid.nearLinks_[link];
@@ -1186,8 +1194,8 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
         const bool below = place.entry >= own.first + step,
                    above = place.entry + step < own.first + own.count;
         if (!below && !above) break;
-        if (below) examine(grid.entries_[place.entry - step]);
-        if (above && examined < kMaxBodyCandidates) examine(grid.entries_[place.entry + step]);
+        if (below) examine(place.entry, place.entry - step);
+        if (above && examined < kMaxBodyCandidates) examine(place.entry, place.entry + step);
       }
       // Then the 7 other cells that may hold an overlapping body. Most are
       // empty: their occupancy bits, when kept, spare those a hash look-up.
@@ -1207,7 +1215,22 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
             grid.cells_[grid.find(place.key + kNeighbourOffsets[place.upperHalf][k])];
         for (std::uint32_t e = cell.first, end = cell.first + cell.count;
              e < end && examined < kMaxBodyCandidates; ++e)
-          examine(grid.entries_[e]);
+          examine(place.entry, e);
+      }
+      // The nearest of those that overlap: which pushers that keeps does not
+      // depend on when each pair was measured.
+      const std::size_t overlapping =
+          detail::keepOverlapping(grid.entries_.data(), candidates.data(), boxesOverlapping);
+      for (std::size_t k = 0; k < overlapping; ++k) {
+        const CandidatePair& c = candidates[k];
+        const BodyGrid::Entry& other = grid.entries_[std::uint32_t(c.pair)];
+        const bool known = apartKnown(c.distance);
+        if (!nearest.wants(known ? c.distance : 0, other.body)) continue;
+        nearest.offer(
+            {other.body, known,
+             Vec3(self.position.x() - other.position.x(), self.position.y() - other.position.y(),
+                  self.position.z() - other.position.z()),
+             c.overlap});
       }
     }
 
