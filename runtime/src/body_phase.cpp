@@ -1137,35 +1137,6 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
     // Most bodies of a small crowd have no other near them.
     if (grid.sortedNeighbours_ && grid.nearHead_[i] == BodyGrid::kNoNeighbour) continue;
     NearestPushers nearest;
-    int examined = 0;
-    // The unsorted grid's candidates whose boxes overlap this body's, as
-    // (this body's entry, the other's) pairs, measured after the gathering
-    // four at a time (detail::keepOverlapping): a pile gathers
-    // kMaxBodyCandidates a body, and each one's three square roots and
-    // three divisions, one at a time, were most of its body phase.
-    struct CandidatePair {
-      std::uint64_t pair;
-      float distance, overlap;
-    };
-    std::array<CandidatePair, kMaxBodyCandidates> candidates;
-    std::size_t boxesOverlapping = 0;
-    auto examine = [&](std::uint32_t selfEntry, std::uint32_t otherEntry) {
-      ++examined;
-      const BodyGrid::Entry& other = grid.entries_[otherEntry];
-      // Overlapping ellipsoids overlap in their bounding boxes too: most
-      // candidates of a walking crowd end here, before any square root.
-      // With no branch (the pair written, the count moved on by the test):
-      // in a pile, which candidates pass is no pattern. A NaN passes, to be
-      // measured, as it did with the early return.
-      const float reachXZ = self.radii.xz + other.radii.xz;
-      const bool boxes =
-          int(!(std::abs(self.position.x() - other.position.x()) >= reachXZ)) &
-          int(!(std::abs(self.position.z() - other.position.z()) >= reachXZ)) &
-          int(!(std::abs(self.position.y() - other.position.y()) >= self.radii.y + other.radii.y));
-      candidates[boxesOverlapping].pair = std::uint64_t(selfEntry) << 32 | otherEntry;
-      boxesOverlapping += boxes;
-    };
-
     if (grid.sortedNeighbours_) {
       // The grid's candidates whose boxes overlap, found by sorting: no more
       // than kMaxBodyCandidates, so examined in any order they give the
@@ -1190,12 +1161,40 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
       // meets the bodies nearest it in index order, not all the same few.
       const BodyGrid::Place& place = grid.places_[i];
       const BodyGrid::Cell& own = grid.cells_[place.cellSlot];
+      // The candidates whose boxes overlap this body's, as (this body's
+      // entry, the other's) pairs, measured after the gathering four at a
+      // time (detail::keepOverlapping): a pile gathers kMaxBodyCandidates a
+      // body, and each one's three square roots and three divisions, one at
+      // a time, were most of its body phase.
+      struct CandidatePair {
+        std::uint64_t pair;
+        float distance, overlap;
+      };
+      std::array<CandidatePair, kMaxBodyCandidates> candidates;
+      std::size_t boxesOverlapping = 0;
+      int examined = 0;
+      auto examine = [&](std::uint32_t otherEntry) {
+        ++examined;
+        const BodyGrid::Entry& other = grid.entries_[otherEntry];
+        // Overlapping ellipsoids overlap in their bounding boxes too: most
+        // candidates of a walking crowd end here, before any square root.
+        // With no branch (the pair written, the count moved on by the
+        // test): in a pile, which candidates pass is no pattern. A NaN
+        // passes, to be measured, as it did with an early return.
+        const float reachXZ = self.radii.xz + other.radii.xz;
+        const bool boxes = int(!(std::abs(self.position.x() - other.position.x()) >= reachXZ)) &
+                           int(!(std::abs(self.position.z() - other.position.z()) >= reachXZ)) &
+                           int(!(std::abs(self.position.y() - other.position.y()) >=
+                                 self.radii.y + other.radii.y));
+        candidates[boxesOverlapping].pair = std::uint64_t(place.entry) << 32 | otherEntry;
+        boxesOverlapping += boxes;
+      };
       for (std::uint32_t step = 1; examined < kMaxBodyCandidates; ++step) {
         const bool below = place.entry >= own.first + step,
                    above = place.entry + step < own.first + own.count;
         if (!below && !above) break;
-        if (below) examine(place.entry, place.entry - step);
-        if (above && examined < kMaxBodyCandidates) examine(place.entry, place.entry + step);
+        if (below) examine(place.entry - step);
+        if (above && examined < kMaxBodyCandidates) examine(place.entry + step);
       }
       // Then the 7 other cells that may hold an overlapping body. Most are
       // empty: their occupancy bits, when kept, spare those a hash look-up.
@@ -1215,7 +1214,7 @@ void pushRange(const World& world, const BodyGrid& grid, std::span<Body> bodies,
             grid.cells_[grid.find(place.key + kNeighbourOffsets[place.upperHalf][k])];
         for (std::uint32_t e = cell.first, end = cell.first + cell.count;
              e < end && examined < kMaxBodyCandidates; ++e)
-          examine(place.entry, e);
+          examine(e);
       }
       // The nearest of those that overlap: which pushers that keeps does not
       // depend on when each pair was measured.
