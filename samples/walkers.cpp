@@ -4,7 +4,7 @@
 //
 //   walkers LEVEL.bspf [--spawns FILE] [--agents N] [--frames F] [--speed M_PER_S]
 //           [--seed K] [--dt S] [--radius-xz R] [--radius-y R] [--method planes|exact]
-//           [--step-height M] [--step-down M] [--threads N]
+//           [--step-height M] [--step-down M] [--threads N] [--pin-threads]
 //           [--trace OUT.csv] [--svg OUT.svg] [--json]
 //           [--brushes FILE]
 //
@@ -126,6 +126,8 @@ int main(int argc, char** argv) {
   app.add_option("--threads", options.threads,
                  "Threads stepping the crowd (a thread pool; same trajectories for any number)")
       ->capture_default_str();
+  app.add_flag("--pin-threads", options.pinThreads,
+               "Each stepping thread on a CPU of its own (Linux; same trajectories)");
   app.add_option("--trace", tracePath,
                  "Write 'frame,agent,x,y,z' (every centre after every frame) to this CSV")
       ->type_name("FILE");
@@ -279,6 +281,7 @@ int main(int argc, char** argv) {
         << ", \"step_height\": " << options.stepHeight << ", \"step_down\": " << options.stepDown
         << ", \"radius_xz\": " << options.radii.xz << ", \"radius_y\": " << options.radii.y
         << ", \"seed\": " << options.seed << ", \"threads\": " << options.threads
+        << ", \"pin_threads\": " << (options.pinThreads ? "true" : "false")
         << ", \"steps\": " << s.steps << ", \"ns_per_step\": " << s.nsPerStep
         << ", \"refused_moves\": " << s.refusedMoves
         << ", \"iterations_mean\": " << s.iterationsMean

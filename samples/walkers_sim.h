@@ -58,6 +58,10 @@ struct Options {
   /// Threads stepping the crowd (a bspf::ThreadPool); the trajectories are
   /// the same for any number.
   int threads = 1;
+  /// Each of those threads on a CPU of its own (ThreadPool::Affinity::
+  /// PinWorkers, and the calling thread pinned to the first CPU): the
+  /// trajectories are the same either way.
+  bool pinThreads = false;
 };
 
 /// An empty string when `options` can run, else what is wrong with them.
@@ -365,8 +369,12 @@ class Simulation {
   Simulation(const World& world, std::span<const Vec3> starts, const Options& options)
       : world_(&world),
         options_(options),
-        pool_(std::make_unique<ThreadPool>(options.threads)),
+        pool_(std::make_unique<ThreadPool>(options.threads, options.pinThreads
+                                                                ? ThreadPool::Affinity::PinWorkers
+                                                                : ThreadPool::Affinity::None)),
         scratches_(std::size_t(options.threads)) {
+    // After the pool: its workers were placed from the process's CPUs.
+    if (options.pinThreads) ThreadPool::pinThisThreadToFirstCpu();
     bodies_.resize(starts.size());
     agents_.resize(starts.size());
     forces_.assign(starts.size(), Vec3::Zero());

@@ -6,6 +6,11 @@
 #include <chrono>
 #include <thread>
 
+#ifdef __linux__
+#include <pthread.h>
+#include <sched.h>
+#endif
+
 #if defined(__x86_64__) || defined(_M_X64) || defined(__i386__) || defined(_M_IX86)
 #include <emmintrin.h>
 #define BSPF_SPIN_PAUSE() _mm_pause()
@@ -15,10 +20,54 @@
 
 namespace bspf {
 
-ThreadPool::ThreadPool(int threads) : shares_(new Share[std::size_t(std::max(threads, 1))]) {
+namespace {
+
+#ifdef __linux__
+// The k-th CPU (modulo their number) of those the process may run on, as a
+// set of one; false when there are none to read.
+bool nthAllowedCpu(int k, cpu_set_t& one) {
+  cpu_set_t allowed;
+  if (sched_getaffinity(0, sizeof(allowed), &allowed) != 0) return false;
+  const int count = CPU_COUNT(&allowed);
+  if (count == 0) return false;
+  int wanted = k % count;
+  for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu) {
+    if (!CPU_ISSET(cpu, &allowed) || wanted-- > 0) continue;
+    CPU_ZERO(&one);
+    CPU_SET(cpu, &one);
+    return true;
+  }
+  return false;
+}
+#endif
+
+}  // namespace
+
+ThreadPool::ThreadPool(int threads, Affinity affinity)
+    : shares_(new Share[std::size_t(std::max(threads, 1))]) {
   assert(threads >= 1);
   workers_.reserve(std::size_t(threads > 1 ? threads - 1 : 0));
-  for (int t = 1; t < threads; ++t) workers_.emplace_back([this, t] { workerLoop(t); });
+  for (int t = 1; t < threads; ++t) {
+    workers_.emplace_back([this, t] { workerLoop(t); });
+#ifdef __linux__
+    // Read from the constructing thread, before any worker is pinned: the
+    // process's CPUs as they are now.
+    cpu_set_t one;
+    if (affinity == Affinity::PinWorkers && nthAllowedCpu(t, one))
+      pthread_setaffinity_np(workers_.back().native_handle(), sizeof(one), &one);
+#else
+    (void)affinity;
+#endif
+  }
+}
+
+bool ThreadPool::pinThisThreadToFirstCpu() {
+#ifdef __linux__
+  cpu_set_t one;
+  return nthAllowedCpu(0, one) && pthread_setaffinity_np(pthread_self(), sizeof(one), &one) == 0;
+#else
+  return false;
+#endif
 }
 
 ThreadPool::~ThreadPool() {

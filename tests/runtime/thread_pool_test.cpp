@@ -8,13 +8,19 @@
 #include <thread>
 #include <vector>
 
+#ifdef __linux__
+#include <sched.h>
+#endif
+
 TEST_CASE("a thread pool's parallelFor covers every item exactly once, call after call",
           "[runtime][threads]") {
   const int threads = GENERATE(1, 2, 3, 4);
   const auto handout =
       GENERATE(bspf::ThreadPool::Handout::ThreadShares, bspf::ThreadPool::Handout::InOrder);
-  INFO(threads << " threads, handout " << int(handout));
-  bspf::ThreadPool pool(threads);
+  const auto affinity =
+      GENERATE(bspf::ThreadPool::Affinity::None, bspf::ThreadPool::Affinity::PinWorkers);
+  INFO(threads << " threads, handout " << int(handout) << ", affinity " << int(affinity));
+  bspf::ThreadPool pool(threads, affinity);
   REQUIRE(pool.threadCount() == threads);
   for (int call = 0; call < 50; ++call) {
     const std::size_t count = std::size_t(call * 37 % 301);
@@ -101,3 +107,75 @@ TEST_CASE("a thread pool's task may be destroyed as soon as parallelFor returns"
     for (std::size_t i = 0; i < count; ++i) REQUIRE(visits[i] == 1);
   }
 }
+
+#ifdef __linux__
+// The CPUs this process may run on, in order.
+static std::vector<int> allowedCpus() {
+  cpu_set_t allowed;
+  std::vector<int> cpus;
+  if (sched_getaffinity(0, sizeof(allowed), &allowed) != 0) return cpus;
+  for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu)
+    if (CPU_ISSET(cpu, &allowed)) cpus.push_back(cpu);
+  return cpus;
+}
+
+TEST_CASE("a pool that pins its workers runs worker t on the t-th of the process's CPUs",
+          "[runtime][threads]") {
+  const std::vector<int> cpus = allowedCpus();
+  if (cpus.size() < 2) {
+    WARN("one CPU only: every worker would be pinned to it, nothing to tell apart");
+    return;
+  }
+  const int threads = 3;
+  bspf::ThreadPool pool(threads, bspf::ThreadPool::Affinity::PinWorkers);
+  // Each worker's CPU and allowed CPUs, as it sees them from inside the
+  // first range it runs. The caller's first range waits for every worker to
+  // have run one (ranges this short are otherwise all the caller's before a
+  // worker wakes).
+  std::vector<int> ranOn(threads, -1);
+  std::vector<std::vector<int>> allowed(threads);
+  std::vector<std::atomic<bool>> ran(threads);
+  std::atomic<int> workersIn = 0;
+  pool.parallelFor(4096, 1, [&](int thread, std::size_t first, std::size_t) {
+    if (thread == 0) {
+      if (first != 0) return;
+      const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+      while (workersIn < threads - 1 && std::chrono::steady_clock::now() < deadline)
+        std::this_thread::yield();
+      return;
+    }
+    if (ran[std::size_t(thread)].exchange(true)) return;
+    ranOn[std::size_t(thread)] = sched_getcpu();
+    cpu_set_t mine;
+    if (sched_getaffinity(0, sizeof(mine), &mine) == 0)
+      for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu)
+        if (CPU_ISSET(cpu, &mine)) allowed[std::size_t(thread)].push_back(cpu);
+    ++workersIn;
+  });
+  REQUIRE(workersIn == threads - 1);
+  for (int t = 1; t < threads; ++t) {
+    INFO("worker " << t);
+    const int expected = cpus[std::size_t(t) % cpus.size()];
+    REQUIRE(ranOn[std::size_t(t)] == expected);
+    REQUIRE(allowed[std::size_t(t)] == std::vector<int>{expected});
+  }
+}
+
+TEST_CASE("pinning a thread to the first CPU leaves it only that one", "[runtime][threads]") {
+  const std::vector<int> cpus = allowedCpus();
+  REQUIRE_FALSE(cpus.empty());
+  // On a thread of its own, so that the test runner's thread keeps its CPUs.
+  bool pinned = false;
+  std::vector<int> after;
+  std::thread([&] {
+    pinned = bspf::ThreadPool::pinThisThreadToFirstCpu();
+    cpu_set_t mine;
+    if (sched_getaffinity(0, sizeof(mine), &mine) == 0)
+      for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu)
+        if (CPU_ISSET(cpu, &mine)) after.push_back(cpu);
+  }).join();
+  REQUIRE(pinned);
+  REQUIRE(after == std::vector<int>{cpus.front()});
+  REQUIRE(allowedCpus() == cpus);
+}
+#endif

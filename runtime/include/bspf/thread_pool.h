@@ -28,12 +28,38 @@ class ThreadPool {
   /// scratch; [first, last) is the range of items to process.
   using RangeTask = std::function<void(int thread, std::size_t first, std::size_t last)>;
 
-  /// Starts `threads - 1` workers. Precondition: threads >= 1.
-  explicit ThreadPool(int threads);
+  /// Where the workers run.
+  enum class Affinity {
+    /// Wherever the operating system puts them (the default).
+    None,
+    /// Worker t (1 to threads - 1) runs only on the t-th CPU, counted from 0
+    /// modulo their number, of those the process may run on when the pool
+    /// is made; CPU 0 of them is left to the thread that calls parallelFor,
+    /// which the application places itself (pinThisThreadToFirstCpu). For a
+    /// loop that steps bodies back to back on a machine it has to itself:
+    /// the workers sleep between frames, and on waking the scheduler put
+    /// the worker on the caller's CPU in 9 to 27% of samples on a 2-core
+    /// VM, where 1,024 walkers on 2 threads then ran no faster than on one
+    /// (walkers --pin-threads: 1.68 to 1.78 times; docs/measurements.md,
+    /// the twenty-eighth pass). Linux only; elsewhere the same as None. A
+    /// worker that cannot be pinned runs unpinned.
+    PinWorkers,
+  };
+
+  /// Starts `threads - 1` workers, placed as `affinity` says. Precondition:
+  /// threads >= 1.
+  explicit ThreadPool(int threads, Affinity affinity = Affinity::None);
   /// Stops and joins the workers. Precondition: no parallelFor running.
   ~ThreadPool();
   ThreadPool(const ThreadPool&) = delete;
   ThreadPool& operator=(const ThreadPool&) = delete;
+
+  /// Pins the calling thread to the first CPU the process may run on (the
+  /// one Affinity::PinWorkers leaves to the caller of parallelFor). Returns
+  /// false, changing nothing, where that is not possible: off Linux, or
+  /// when the system refuses. Call it after making the pool: threads made
+  /// later, a pool's workers too, start on the pinned thread's one CPU.
+  static bool pinThisThreadToFirstCpu();
 
   /// The threads that run a parallelFor, the caller included: >= 1.
   int threadCount() const { return int(workers_.size()) + 1; }
