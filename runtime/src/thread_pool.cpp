@@ -50,8 +50,8 @@ ThreadPool::ThreadPool(int threads, Affinity affinity)
   for (int t = 1; t < threads; ++t) {
     workers_.emplace_back([this, t] { workerLoop(t); });
 #ifdef __linux__
-    // Read from the constructing thread, before any worker is pinned: the
-    // process's CPUs as they are now.
+    // The constructing thread's CPUs, which pinning a worker leaves as
+    // they are.
     cpu_set_t one;
     if (affinity == Affinity::PinWorkers && nthAllowedCpu(t, one))
       pthread_setaffinity_np(workers_.back().native_handle(), sizeof(one), &one);

@@ -109,7 +109,7 @@ TEST_CASE("a thread pool's task may be destroyed as soon as parallelFor returns"
 }
 
 #ifdef __linux__
-// The CPUs this process may run on, in order.
+// The CPUs the calling thread may run on, in order.
 static std::vector<int> allowedCpus() {
   cpu_set_t allowed;
   std::vector<int> cpus;
@@ -146,10 +146,7 @@ TEST_CASE("a pool that pins its workers runs worker t on the t-th of the process
     }
     if (ran[std::size_t(thread)].exchange(true)) return;
     ranOn[std::size_t(thread)] = sched_getcpu();
-    cpu_set_t mine;
-    if (sched_getaffinity(0, sizeof(mine), &mine) == 0)
-      for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu)
-        if (CPU_ISSET(cpu, &mine)) allowed[std::size_t(thread)].push_back(cpu);
+    allowed[std::size_t(thread)] = allowedCpus();
     ++workersIn;
   });
   REQUIRE(workersIn == threads - 1);
@@ -169,10 +166,7 @@ TEST_CASE("pinning a thread to the first CPU leaves it only that one", "[runtime
   std::vector<int> after;
   std::thread([&] {
     pinned = bspf::ThreadPool::pinThisThreadToFirstCpu();
-    cpu_set_t mine;
-    if (sched_getaffinity(0, sizeof(mine), &mine) == 0)
-      for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu)
-        if (CPU_ISSET(cpu, &mine)) after.push_back(cpu);
+    after = allowedCpus();
   }).join();
   REQUIRE(pinned);
   REQUIRE(after == std::vector<int>{cpus.front()});
