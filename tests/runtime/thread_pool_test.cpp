@@ -129,25 +129,27 @@ TEST_CASE("a pool that pins its workers runs worker t on the t-th of the process
   const int threads = 3;
   bspf::ThreadPool pool(threads, bspf::ThreadPool::Affinity::PinWorkers);
   // Each worker's CPU and allowed CPUs, as it sees them from inside the
-  // first range it runs. The caller's first range waits for every worker to
-  // have run one (ranges this short are otherwise all the caller's before a
-  // worker wakes).
+  // first range it runs (ranges this short are otherwise all taken by the
+  // first threads awake).
   std::vector<int> ranOn(threads, -1);
   std::vector<std::vector<int>> allowed(threads);
   std::vector<std::atomic<bool>> ran(threads);
   std::atomic<int> workersIn = 0;
-  pool.parallelFor(4096, 1, [&](int thread, std::size_t first, std::size_t) {
-    if (thread == 0) {
-      if (first != 0) return;
-      const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-      while (workersIn < threads - 1 && std::chrono::steady_clock::now() < deadline)
-        std::this_thread::yield();
-      return;
-    }
+  // Every thread's first range waits until each worker has run one, so no
+  // thread takes another's ranges before that worker has joined.
+  auto waitForWorkers = [&] {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (workersIn < threads - 1 && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::yield();
+  };
+  pool.parallelFor(4096, 1, [&](int thread, std::size_t, std::size_t) {
     if (ran[std::size_t(thread)].exchange(true)) return;
-    ranOn[std::size_t(thread)] = sched_getcpu();
-    allowed[std::size_t(thread)] = allowedCpus();
-    ++workersIn;
+    if (thread != 0) {
+      ranOn[std::size_t(thread)] = sched_getcpu();
+      allowed[std::size_t(thread)] = allowedCpus();
+      ++workersIn;
+    }
+    waitForWorkers();
   });
   REQUIRE(workersIn == threads - 1);
   for (int t = 1; t < threads; ++t) {
