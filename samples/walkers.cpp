@@ -4,7 +4,7 @@
 //
 //   walkers LEVEL.bspf [--spawns FILE] [--agents N] [--frames F] [--speed M_PER_S]
 //           [--seed K] [--dt S] [--radius-xz R] [--radius-y R] [--method planes|exact]
-//           [--step-height M] [--step-down M] [--threads N] [--pin-threads]
+//           [--step-height M] [--step-down M] [--threads N] [--pin-threads] [--spin-us US]
 //           [--trace OUT.csv] [--svg OUT.svg] [--json]
 //           [--brushes FILE]
 //
@@ -128,6 +128,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--pin-threads", options.pinThreads,
                "Each stepping thread on a CPU of its own (Linux; same trajectories)");
+  app.add_option("--spin-us", options.spinMicroseconds,
+                 "How long a stepping thread with no work waits busily for the next before it "
+                 "sleeps, microseconds (the thread pool's spinBeforeSleep; same trajectories)")
+      ->capture_default_str();
   app.add_option("--trace", tracePath,
                  "Write 'frame,agent,x,y,z' (every centre after every frame) to this CSV")
       ->type_name("FILE");
@@ -282,8 +286,9 @@ int main(int argc, char** argv) {
         << ", \"radius_xz\": " << options.radii.xz << ", \"radius_y\": " << options.radii.y
         << ", \"seed\": " << options.seed << ", \"threads\": " << options.threads
         << ", \"pin_threads\": " << (options.pinThreads ? "true" : "false")
-        << ", \"steps\": " << s.steps << ", \"ns_per_step\": " << s.nsPerStep
-        << ", \"refused_moves\": " << s.refusedMoves
+        << ", \"spin_us\": " << options.spinMicroseconds
+        << ", \"pool_sleeps\": " << sim.poolSleeps() << ", \"steps\": " << s.steps
+        << ", \"ns_per_step\": " << s.nsPerStep << ", \"refused_moves\": " << s.refusedMoves
         << ", \"iterations_mean\": " << s.iterationsMean
         << ", \"iterations_max\": " << s.iterationsMax
         << ", \"grounded_fraction\": " << s.groundedFraction

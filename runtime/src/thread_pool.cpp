@@ -43,9 +43,10 @@ bool nthAllowedCpu(int k, cpu_set_t& one) {
 
 }  // namespace
 
-ThreadPool::ThreadPool(int threads, Affinity affinity)
-    : shares_(new Share[std::size_t(std::max(threads, 1))]) {
+ThreadPool::ThreadPool(int threads, Affinity affinity, std::chrono::microseconds spinBeforeSleep)
+    : shares_(new Share[std::size_t(std::max(threads, 1))]), spinBeforeSleep_(spinBeforeSleep) {
   assert(threads >= 1);
+  assert(spinBeforeSleep.count() >= 0);
   workers_.reserve(std::size_t(threads > 1 ? threads - 1 : 0));
   for (int t = 1; t < threads; ++t) {
     workers_.emplace_back([this, t] { workerLoop(t); });
@@ -81,14 +82,11 @@ ThreadPool::~ThreadPool() {
 
 namespace {
 
-// Spins until done() or for about kSpinMicroseconds, whichever is first;
-// returns done(). Long enough to span the gap between two phases of a frame
-// (the serial work between them, such as building the body grid), short
-// enough to cost little when the pool then sleeps until the next frame.
+// Spins until done() or for about `spin`, whichever is first; returns
+// done().
 template <typename Done>
-bool spinUntil(Done done) {
-  constexpr auto kSpinMicroseconds = std::chrono::microseconds(50);
-  const auto until = std::chrono::steady_clock::now() + kSpinMicroseconds;
+bool spinUntil(std::chrono::microseconds spin, Done done) {
+  const auto until = std::chrono::steady_clock::now() + spin;
   for (int k = 1;; ++k) {
     if (done()) return true;
     BSPF_SPIN_PAUSE();
@@ -114,12 +112,13 @@ void ThreadPool::runRanges(int thread) {
 void ThreadPool::workerLoop(int thread) {
   unsigned long long seen = 0;
   for (;;) {
-    spinUntil([&] {
+    spinUntil(spinBeforeSleep_, [&] {
       return stopping_.load(std::memory_order_relaxed) ||
              generation_.load(std::memory_order_relaxed) != seen;
     });
     {
       std::unique_lock lock(mutex_);
+      if (!stopping_ && generation_ == seen) sleeps_.fetch_add(1, std::memory_order_relaxed);
       wake_.wait(lock, [&] { return stopping_ || generation_ != seen; });
       if (stopping_) return;
       seen = generation_;
@@ -176,7 +175,8 @@ void ThreadPool::parallelFor(std::size_t count, std::size_t chunk, const RangeTa
   // Every range is taken: closed, no worker joins any more; those that did
   // leave before the task goes out of scope.
   const auto left = [&] { return joined_.load(std::memory_order_acquire) == kClosed; };
-  if (joined_.fetch_or(kClosed, std::memory_order_acq_rel) != 0 && !spinUntil(left)) {
+  if (joined_.fetch_or(kClosed, std::memory_order_acq_rel) != 0 &&
+      !spinUntil(spinBeforeSleep_, left)) {
     std::unique_lock lock(mutex_);
     done_.wait(lock, left);
   }

@@ -79,6 +79,45 @@ TEST_CASE("a thread pool covers every item when its workers have gone to sleep b
   }
 }
 
+TEST_CASE("a pool's workers sleep between calls further apart than their spin, and only then",
+          "[runtime][threads]") {
+  // Calls 2 ms apart: longer than a zero spin, far shorter than a 10 s one.
+  // The destructor ends a spin at once, so the long one costs no time here.
+  const auto pausedCalls = [](bspf::ThreadPool& pool) {
+    for (int call = 0; call < 6; ++call) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      std::atomic<int> visits = 0;
+      pool.parallelFor(
+          64, 4, [&](int, std::size_t first, std::size_t last) { visits += int(last - first); });
+      REQUIRE(visits == 64);
+    }
+  };
+  SECTION("a zero spin: every worker sleeps before each call") {
+    bspf::ThreadPool pool(3, bspf::ThreadPool::Affinity::None, std::chrono::microseconds(0));
+    pausedCalls(pool);
+    // Each of the 2 workers sleeps in each pause it spends waiting (12 in
+    // all); fewer only for one the system kept from running through a
+    // pause, so the bound leaves room for a loaded machine.
+    REQUIRE(pool.sleeps() >= 3);
+  }
+  SECTION("a spin longer than the pauses: no worker sleeps once it has run a job") {
+    bspf::ThreadPool pool(3, bspf::ThreadPool::Affinity::None, std::chrono::seconds(10));
+    // Every worker joins the first job (each of its first ranges waits for
+    // both), so each is awake and spinning after it.
+    std::atomic<int> started = 0;
+    pool.parallelFor(3, 1, [&](int, std::size_t, std::size_t) {
+      ++started;
+      for (long spins = 0; started.load() < 3 && spins < 2'000'000'000L; ++spins)
+        std::this_thread::yield();
+    });
+    REQUIRE(started == 3);
+    const unsigned long long before = pool.sleeps();
+    REQUIRE(before <= 2);  // at most each worker's wait for the first job
+    pausedCalls(pool);
+    REQUIRE(pool.sleeps() == before);
+  }
+}
+
 TEST_CASE("a thread pool's task may be destroyed as soon as parallelFor returns",
           "[runtime][threads]") {
   // The caller runs out of ranges and returns without waiting for a worker

@@ -257,6 +257,11 @@ TEST_CASE("walkers: spawn files, options, placement and determinism", "[samples]
     REQUIRE(bspf::walkers::validate(o).empty());
     o.threads = 0;
     REQUIRE_THAT(bspf::walkers::validate(o), Catch::Contains("--threads"));
+    o = {};
+    o.spinMicroseconds = -1;
+    REQUIRE_THAT(bspf::walkers::validate(o), Catch::Contains("--spin-us"));
+    o.spinMicroseconds = 0;
+    REQUIRE(bspf::walkers::validate(o).empty());
   }
   SECTION("placement on floor and determinism, on the arena") {
     const Level level = loadLevel(bspf::test::samplesDir(), "arena", dir);

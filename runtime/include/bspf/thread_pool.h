@@ -5,6 +5,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstddef>
 #include <functional>
@@ -19,8 +20,9 @@ namespace bspf {
 /// wake-ups, never a thread creation. The calling thread takes part in the
 /// work, so a pool of N threads starts N - 1 workers (none for N = 1).
 /// After each job the workers (and, waiting for them, the caller) spin for
-/// up to 50 µs before sleeping, so the next phase of a frame starts without
-/// a wake-up: a pool costs up to that much CPU per job beyond its work.
+/// a while (50 µs unless the pool is made with another spinBeforeSleep)
+/// before sleeping, so the next phase of a frame starts without a wake-up:
+/// a pool costs up to that much CPU per job beyond its work.
 class ThreadPool {
  public:
   /// A work item: `thread` is the index, 0 to threadCount() - 1, of the
@@ -46,9 +48,27 @@ class ThreadPool {
     PinWorkers,
   };
 
-  /// Starts `threads - 1` workers, placed as `affinity` says. Precondition:
-  /// threads >= 1.
-  explicit ThreadPool(int threads, Affinity affinity = Affinity::None);
+  /// How long a thread with no work left waits busily for the next job
+  /// before it sleeps, unless the pool is made with another time: long
+  /// enough to span the gap between two phases of a frame (the serial work
+  /// between them, such as the body phase's checks), short enough to cost
+  /// little when the pool then sleeps until the next frame.
+  static constexpr std::chrono::microseconds kDefaultSpinBeforeSleep{50};
+
+  /// Starts `threads - 1` workers, placed as `affinity` says, that spin for
+  /// `spinBeforeSleep` after each job before they sleep. A spin longer than
+  /// the gap between a frame's last job and the next frame's first keeps
+  /// the workers awake from frame to frame, at the cost of that much CPU
+  /// per worker and frame when the frames are further apart: for a loop
+  /// that steps back to back (a server, a benchmark). That also keeps a
+  /// worker where it was: a sleeping worker is placed again when it wakes,
+  /// and on the project's 2-core VM the scheduler put it on the caller's
+  /// CPU often enough that 1,024 walkers on 2 threads ran no faster than
+  /// on one with 50 µs, and 1.80 to 1.86 times as fast with 5 ms (walkers
+  /// --spin-us; docs/measurements.md, the twenty-ninth pass).
+  /// Preconditions: threads >= 1, spinBeforeSleep >= 0.
+  explicit ThreadPool(int threads, Affinity affinity = Affinity::None,
+                      std::chrono::microseconds spinBeforeSleep = kDefaultSpinBeforeSleep);
   /// Stops and joins the workers. Precondition: no parallelFor running.
   ~ThreadPool();
   ThreadPool(const ThreadPool&) = delete;
@@ -63,6 +83,13 @@ class ThreadPool {
 
   /// The threads that run a parallelFor, the caller included: >= 1.
   int threadCount() const { return int(workers_.size()) + 1; }
+
+  /// How many times, since the pool was made, a worker found no job at the
+  /// end of its spin and went to sleep (each worker's first wait counts
+  /// too, unless a job came within its spin). For tuning spinBeforeSleep:
+  /// a count that grows by the workers' number every frame says they sleep
+  /// between frames. Thread safety: may be read while a job runs.
+  unsigned long long sleeps() const { return sleeps_.load(std::memory_order_relaxed); }
 
   /// How parallelFor hands ranges out to the threads.
   enum class Handout {
@@ -126,6 +153,8 @@ class ThreadPool {
   std::atomic<unsigned> joined_{kClosed};
   static constexpr unsigned kClosed = 1u << 31;
   std::atomic<bool> stopping_{false};
+  std::chrono::microseconds spinBeforeSleep_;
+  std::atomic<unsigned long long> sleeps_{0};
 };
 
 }  // namespace bspf
