@@ -38,13 +38,14 @@ class ThreadPool {
     /// modulo their number, of those the process may run on when the pool
     /// is made; CPU 0 of them is left to the thread that calls parallelFor,
     /// which the application places itself (pinThisThreadToFirstCpu). For a
-    /// loop that steps bodies back to back on a machine it has to itself:
-    /// the workers sleep between frames, and on waking the scheduler put
-    /// the worker on the caller's CPU in 9 to 27% of samples on a 2-core
-    /// VM, where 1,024 walkers on 2 threads then ran no faster than on one
-    /// (walkers --pin-threads: 1.68 to 1.78 times; docs/measurements.md,
-    /// the twenty-eighth pass). Linux only; elsewhere the same as None. A
-    /// worker that cannot be pinned runs unpinned.
+    /// loop that steps bodies back to back on a machine it has to itself.
+    /// On the project's 2-core VM (whose kernel packs threads onto few
+    /// CPUs) the scheduler put a new or woken worker on the caller's CPU,
+    /// and left it there, in about half the runs of 1,024 walkers, which
+    /// then ran on 2 threads no faster than on one; pinned, 1.76 to 1.85
+    /// times (docs/measurements.md, the twenty-ninth pass). Linux only;
+    /// elsewhere the same as None. A worker that cannot be pinned runs
+    /// unpinned.
     PinWorkers,
   };
 
@@ -61,11 +62,11 @@ class ThreadPool {
   /// the workers awake from frame to frame, at the cost of that much CPU
   /// per worker and frame when the frames are further apart: for a loop
   /// that steps back to back (a server, a benchmark). That also keeps a
-  /// worker where it was: a sleeping worker is placed again when it wakes,
-  /// and on the project's 2-core VM the scheduler put it on the caller's
-  /// CPU often enough that 1,024 walkers on 2 threads ran no faster than
-  /// on one with 50 µs, and 1.80 to 1.86 times as fast with 5 ms (walkers
-  /// --spin-us; docs/measurements.md, the twenty-ninth pass).
+  /// worker where it runs: a sleeping worker is placed again when it wakes,
+  /// and on the project's 2-core VM it was often woken onto the caller's
+  /// CPU (1,024 walkers on 2 threads: 1.0 to 1.1 times one with 50 µs,
+  /// 1.84 with 5 ms in the same runs; walkers --spin-us,
+  /// docs/measurements.md, the twenty-ninth pass).
   /// Preconditions: threads >= 1, spinBeforeSleep >= 0.
   explicit ThreadPool(int threads, Affinity affinity = Affinity::None,
                       std::chrono::microseconds spinBeforeSleep = kDefaultSpinBeforeSleep);
