@@ -526,6 +526,14 @@ void BodyGrid::sweep(std::size_t n, const Inputs& inputs, bool anyFast) {
   }
 }
 
+BodyGrid::CellKey BodyGrid::cellKeyOf(const Vec3& p, float inverseWidth, float inverseHeight) {
+  bool upper[3];
+  const std::uint64_t x = cellCoordinate(p.x() * inverseWidth, upper[0]),
+                      y = cellCoordinate(p.y() * inverseHeight, upper[1]),
+                      z = cellCoordinate(p.z() * inverseWidth, upper[2]);
+  return {x << 42 | y << 21 | z, std::uint8_t(upper[0] | upper[1] << 1 | upper[2] << 2)};
+}
+
 std::uint32_t BodyGrid::find(std::uint64_t key) const {
   const std::uint32_t mask = std::uint32_t(cells_.size() - 1);
   // Fibonacci hashing: the golden-ratio multiplier carries the low bits that
@@ -544,6 +552,8 @@ void BodyGrid::build(std::span<const Body> bodies) {
     float skin(std::size_t i) const { return bodies[i].settings.skin; }
     bool fast(std::size_t i) const { return sweptFast(bodies[i]); }
     detail::CrowdScan scan(std::size_t) const { return detail::scanCrowd(bodies, movedFast); }
+    bool keyedFor(float, float) const { return false; }
+    CellKey cellKey(std::size_t) const { return {}; }
     // With SSE2, a body's position in one 16-byte copy (the lane after it,
     // velocity.x, lands where the radii go next): Eigen's copy and the test
     // of the stops took 14 instructions a body-step (walkers, 64 agents,
@@ -615,22 +625,25 @@ void BodyGrid::buildFrom(std::size_t n, const Inputs& inputs) {
   // A counting sort by cell: count, lay the cells out in table order, place
   // each body in its cell's next place.
   places_.resize(n);
+  // The cells prepare() cut, where it cut them as this build does (the
+  // bodies' widest and tallest did not change since the last build): they
+  // are the same keys, and the work was done on every core at once.
+  const bool keyed = inputs.keyedFor(inverseWidth_, inverseHeight_);
   std::array<std::uint64_t, 3> lowCell{kFieldMask, kFieldMask, kFieldMask}, highCell{};
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec3 p = endOf(i);
-    bool upper[3];
-    const std::array<std::uint64_t, 3> cell{cellCoordinate(p.x() * inverseWidth_, upper[0]),
-                                            cellCoordinate(p.y() * inverseHeight_, upper[1]),
-                                            cellCoordinate(p.z() * inverseWidth_, upper[2])};
+    const bool stopped = !stops_.empty() && stops_[i].time < 1;
+    const CellKey c =
+        keyed && !stopped ? inputs.cellKey(i) : cellKeyOf(endOf(i), inverseWidth_, inverseHeight_);
+    const std::uint64_t key = c.key;
+    const std::array<std::uint64_t, 3> cell{key >> 42, key >> 21 & kFieldMask, key & kFieldMask};
     for (int axis = 0; axis < 3; ++axis) {
       lowCell[axis] = std::min(lowCell[axis], cell[axis]);
       highCell[axis] = std::max(highCell[axis], cell[axis]);
     }
-    const std::uint64_t key = cell[0] << 42 | cell[1] << 21 | cell[2];
     const std::uint32_t slot = find(key);
     cells_[slot].key = key;
     ++cells_[slot].count;
-    places_[i] = {key, 0, slot, 0, std::uint8_t(upper[0] | upper[1] << 1 | upper[2] << 2)};
+    places_[i] = {key, 0, slot, 0, c.upperHalf};
   }
   // The occupancy bits, when their box is small: a crowd on a level spans a
   // few thousand cells at most.
@@ -911,19 +924,32 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
   return true;
 }
 
-void BodyGrid::startPreparing(std::size_t bodies) { prepared_.resize(bodies); }
+void BodyGrid::startPreparing(std::size_t bodies) {
+  prepared_.resize(bodies);
+  // The cells of the last build: a crowd's widest and tallest body seldom
+  // change, and a build whose cells differ cuts its own.
+  keyedInverseWidth_ = inverseWidth_;
+  keyedInverseHeight_ = inverseHeight_;
+}
 
 void BodyGrid::prepare(std::span<const Body> bodies, std::size_t first, std::size_t last) {
   assert(last <= prepared_.size() && prepared_.size() == bodies.size());
   for (std::size_t i = first; i < last; ++i) {
     const Body& b = bodies[i];
-    prepared_[i] = {b.position, b.lastStepStart, b.radii, b.settings.skin, sweptFast(b)};
+    prepared_[i] = {b.position,   b.lastStepStart,
+                    b.radii,      b.settings.skin,
+                    sweptFast(b), cellKeyOf(b.position, keyedInverseWidth_, keyedInverseHeight_)};
   }
 }
 
 void BodyGrid::buildPrepared(const BodyGrid& prepared) {
   struct FromPrepared {
     const std::vector<BodyGrid::Prepared>& prepared;
+    float keyedInverseWidth, keyedInverseHeight;
+    bool keyedFor(float inverseWidth, float inverseHeight) const {
+      return inverseWidth == keyedInverseWidth && inverseHeight == keyedInverseHeight;
+    }
+    CellKey cellKey(std::size_t i) const { return prepared[i].cell; }
     const Vec3& position(std::size_t i) const { return prepared[i].position; }
     const Vec3& start(std::size_t i) const { return prepared[i].start; }
     EllipsoidRadii radii(std::size_t i) const { return prepared[i].radii; }
@@ -943,7 +969,8 @@ void BodyGrid::buildPrepared(const BodyGrid& prepared) {
       return crowd;
     }
   };
-  buildFrom(prepared.prepared_.size(), FromPrepared{prepared.prepared_});
+  buildFrom(prepared.prepared_.size(), FromPrepared{prepared.prepared_, prepared.keyedInverseWidth_,
+                                                    prepared.keyedInverseHeight_});
 }
 
 void pushBodiesApart(const World& world, const BodyGrid& grid, std::span<Body> bodies,

@@ -506,19 +506,31 @@ class BodyGrid {
   friend void detail::pushRange(const World&, const BodyGrid&, std::span<Body>, std::size_t,
                                 std::size_t, StepScratch&, std::span<StepReport>,
                                 std::span<detail::BodyCache>);
-  /// What build reads of a body.
+  /// A body's cell: its packed coordinates, and the halves it lies in
+  /// (Place::upperHalf).
+  struct CellKey {
+    std::uint64_t key;
+    std::uint8_t upperHalf;
+  };
+  /// The cell of centre `p`, in cells 1 / inverseWidth wide and
+  /// 1 / inverseHeight tall.
+  static CellKey cellKeyOf(const Vec3& p, float inverseWidth, float inverseHeight);
+  /// What build reads of a body, and the cell of its position in the cells
+  /// of keyedInverseWidth_ and keyedInverseHeight_.
   struct Prepared {
     Vec3 position;
     Vec3 start;  ///< Body::lastStepStart
     EllipsoidRadii radii;
     float skin;  ///< MovementSettings::skin
     bool fast;   ///< movedFast
+    CellKey cell;
   };
   /// build, given what it reads of each of `n` bodies (by index i < n:
   /// position(i), start(i), radii(i), skin(i), fast(i); scan(n), their cell
   /// size and whether any is fast; placeEntries(entries), each body's entry
-  /// where it ends unless the sweep stops it); it reads nothing else of
-  /// them.
+  /// where it ends unless the sweep stops it; keyedFor(inverseWidth,
+  /// inverseHeight), whether cellKey(i) is the cell of position(i) in cells
+  /// of that size); it reads nothing else of them.
   template <typename Inputs>
   void buildFrom(std::size_t n, const Inputs& inputs);
   struct Entry {
@@ -599,6 +611,9 @@ class BodyGrid {
   std::vector<Entry> entries_;
   std::vector<Place> places_;       ///< by body index
   std::vector<Prepared> prepared_;  ///< by body index (prepare)
+  /// The cell size (inverse, as inverseWidth_ and inverseHeight_) that
+  /// prepare() cuts the prepared bodies' cells with: the last build's.
+  float keyedInverseWidth_ = 1, keyedInverseHeight_ = 1;
   /// When the box of the occupied cells, grown by one cell on every side, is
   /// small (a few hundred cells a body): a bit a cell of it, set where a
   /// body is, so that most empty neighbours cost a bit test, not a hash
