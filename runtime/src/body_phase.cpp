@@ -927,8 +927,11 @@ bool BodyGrid::findNeighboursBySorting(float width, float height) {
 void BodyGrid::startPreparing(std::size_t bodies) {
   prepared_.resize(bodies);
   // The cells of the last build: a crowd's widest and tallest body seldom
-  // change, and a build whose cells differ cuts its own.
-  keyedInverseWidth_ = inverseWidth_;
+  // change, and a build whose cells differ cuts its own. None for a crowd
+  // small enough to be sorted (most often with no cells): a NaN size
+  // matches no build's.
+  const bool cut = bodies > std::size_t(kSortedNeighbourBodies);
+  keyedInverseWidth_ = cut ? inverseWidth_ : std::numeric_limits<float>::quiet_NaN();
   keyedInverseHeight_ = inverseHeight_;
 }
 
@@ -936,9 +939,9 @@ void BodyGrid::prepare(std::span<const Body> bodies, std::size_t first, std::siz
   assert(last <= prepared_.size() && prepared_.size() == bodies.size());
   for (std::size_t i = first; i < last; ++i) {
     const Body& b = bodies[i];
-    prepared_[i] = {b.position,   b.lastStepStart,
-                    b.radii,      b.settings.skin,
-                    sweptFast(b), cellKeyOf(b.position, keyedInverseWidth_, keyedInverseHeight_)};
+    prepared_[i] = {b.position, b.lastStepStart, b.radii, b.settings.skin, sweptFast(b), {}};
+    if (!std::isnan(keyedInverseWidth_))
+      prepared_[i].cell = cellKeyOf(b.position, keyedInverseWidth_, keyedInverseHeight_);
   }
 }
 

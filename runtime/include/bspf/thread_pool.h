@@ -42,7 +42,7 @@ class ThreadPool {
     /// On the project's 2-core VM (whose kernel packs threads onto few
     /// CPUs) the scheduler put a new or woken worker on the caller's CPU,
     /// and left it there, in about half the runs of 1,024 walkers, which
-    /// then ran on 2 threads no faster than on one; pinned, 1.76 to 1.85
+    /// then ran on 2 threads no faster than on one; pinned, 1.72 to 1.89
     /// times (docs/measurements.md, the twenty-ninth pass). Linux only;
     /// elsewhere the same as None. A worker that cannot be pinned runs
     /// unpinned.
