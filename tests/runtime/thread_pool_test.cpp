@@ -92,7 +92,7 @@ TEST_CASE("a pool's workers sleep between calls further apart than their spin, a
       REQUIRE(visits == 64);
     }
   };
-  SECTION("a zero spin: every worker sleeps before each call") {
+  SECTION("a zero spin: the workers sleep in the pauses") {
     bspf::ThreadPool pool(3, bspf::ThreadPool::Affinity::None, std::chrono::microseconds(0));
     pausedCalls(pool);
     // Each of the 2 workers sleeps in each pause it spends waiting (12 in

@@ -611,9 +611,10 @@ class BodyGrid {
   std::vector<Entry> entries_;
   std::vector<Place> places_;       ///< by body index
   std::vector<Prepared> prepared_;  ///< by body index (prepare)
-  /// The cell size (inverse, as inverseWidth_ and inverseHeight_) that
-  /// prepare() cuts the prepared bodies' cells with: the last build's (a
-  /// NaN width when it cuts none).
+  /// Whether prepare() cuts the prepared bodies' cells, and the cell size
+  /// (inverse, as inverseWidth_ and inverseHeight_) it cuts them with: the
+  /// last build's.
+  bool cutsCells_ = false;
   float keyedInverseWidth_ = 1, keyedInverseHeight_ = 1;
   /// When the box of the occupied cells, grown by one cell on every side, is
   /// small (a few hundred cells a body): a bit a cell of it, set where a
